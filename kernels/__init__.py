@@ -1,0 +1,5 @@
+"""Taichi kernels of tidem (installed as `tidem.kernels`).
+
+Kernels never see the scene schema: `tidem.solver` hands them a namespace of Taichi fields and
+plain numbers, and builds only the kernels a scene needs.
+"""

@@ -1,0 +1,142 @@
+"""Broad phase: uniform cell grid by counting sort, Verlet neighbour list, history carry-over.
+
+Algorithm (O(N) per rebuild):
+1. count particles per cell (atomic add), exclusive prefix sum, scatter particle indices into
+   cell order (counting sort);
+2. for every particle i, scan the 27 cells around it and keep every j != i with
+   |x_j - x_i| < r_i + r_j + skin (a *full* list: each pair appears in both rows, so the force
+   loop writes only its own particle and needs no atomics, which keeps runs deterministic);
+3. sort the row by partner index (so the result does not depend on thread timing), then
+   carry each contact's history (tangential spring, rolling spring, maximum overlap) from the
+   old row to the partner's slot in the new row. Both rows are sorted, so matching is a
+   merge, and the history is moved in place: entries moving right are moved first in
+   descending order, then entries moving left in ascending order, then new slots are zeroed.
+
+A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
+error that names the setting to raise (never a silent drop).
+"""
+
+import taichi as ti
+
+from .geometry import make_geometry
+
+
+def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S):
+    """Return `rebuild()` that refreshes `S.nbr`, `S.nbr_n` and moves the contact history.
+
+    S: a namespace of Taichi fields (see `tidem.state.State`).
+    """
+    min_image, _wrap, cell_coord, cell_id = make_geometry(grid)
+    cells = grid.cells
+    per = grid.periodic
+    n_cells = grid.n_cells
+
+    @ti.kernel
+    def count_cells(n: ti.i32):
+        for c in range(n_cells):
+            S.cell_count[c] = 0
+        for i in range(n):
+            if S.active[i]:
+                c = cell_id(cell_coord(S.x[i]))
+                S.pcell[i] = c
+                ti.atomic_add(S.cell_count[c], 1)
+
+    @ti.kernel
+    def prefix_sum():
+        run = 0
+        ti.loop_config(serialize=True)
+        for c in range(n_cells):
+            S.cell_start[c] = run
+            S.cell_fill[c] = run
+            run += S.cell_count[c]
+
+    @ti.kernel
+    def scatter(n: ti.i32):
+        for i in range(n):
+            if S.active[i]:
+                slot = ti.atomic_add(S.cell_fill[S.pcell[i]], 1)
+                S.sorted_idx[slot] = i
+
+    @ti.func
+    def move_history(i, dst, src):
+        S.ft[i, dst] = S.ft[i, src]
+        if ti.static(rolling):
+            S.mr[i, dst] = S.mr[i, src]
+        if ti.static(hysteretic):
+            S.dmax[i, dst] = S.dmax[i, src]
+
+    @ti.kernel
+    def build_rows(n: ti.i32):
+        for i in range(n):
+            if not S.active[i]:
+                S.nbr_n[i] = 0
+                continue
+            xi = S.x[i]
+            ri = S.radius[i]
+            c0 = cell_coord(xi)
+            count = 0
+            for dx, dy, dz in ti.ndrange((-1, 2), (-1, 2), (-1, 2)):
+                c = c0 + ti.Vector([dx, dy, dz])
+                inside = True
+                for a in ti.static(range(3)):
+                    if ti.static(per[a]):
+                        c[a] = (c[a] + cells[a]) % cells[a]
+                    elif c[a] < 0 or c[a] >= cells[a]:
+                        inside = False
+                if inside:
+                    cid = cell_id(c)
+                    for s in range(S.cell_start[cid], S.cell_start[cid] + S.cell_count[cid]):
+                        j = S.sorted_idx[s]
+                        if j != i:
+                            d = min_image(S.x[j] - xi)
+                            reach = ri + S.radius[j] + skin
+                            if d.norm_sqr() < reach * reach:
+                                if count < K:
+                                    S.nbr_new[i, count] = j
+                                count += 1
+            if count > K:
+                ti.atomic_max(S.overflow[0], count)
+                count = K
+            # insertion sort of the row by partner index
+            for a in range(1, count):
+                key = S.nbr_new[i, a]
+                b = a - 1
+                while b >= 0 and S.nbr_new[i, b] > key:
+                    S.nbr_new[i, b + 1] = S.nbr_new[i, b]
+                    b -= 1
+                S.nbr_new[i, b + 1] = key
+            # match partners with the old (sorted) row
+            n_old = S.nbr_n[i]
+            a = 0
+            for k in range(count):
+                j = S.nbr_new[i, k]
+                while a < n_old and S.nbr[i, a] < j:
+                    a += 1
+                S.src[i, k] = a if (a < n_old and S.nbr[i, a] == j) else -1
+            for kk in range(count):  # entries moving right, descending
+                k = count - 1 - kk
+                src = S.src[i, k]
+                if src >= 0 and src < k:
+                    move_history(i, k, src)
+            for k in range(count):  # entries moving left, ascending
+                src = S.src[i, k]
+                if src > k:
+                    move_history(i, k, src)
+            for k in range(count):
+                if S.src[i, k] < 0:
+                    S.ft[i, k] = ti.Vector([0.0, 0.0, 0.0])
+                    if ti.static(rolling):
+                        S.mr[i, k] = ti.Vector([0.0, 0.0, 0.0])
+                    if ti.static(hysteretic):
+                        S.dmax[i, k] = 0.0
+                S.nbr[i, k] = S.nbr_new[i, k]
+            S.nbr_n[i] = count
+            S.x_build[i] = xi
+
+    def rebuild(n: int) -> None:
+        count_cells(n)
+        prefix_sum()
+        scatter(n)
+        build_rows(n)
+
+    return rebuild

@@ -1,0 +1,169 @@
+"""Contact forces and torques: particle-particle (from the Verlet list), plane walls and tubes.
+
+One kernel, one thread per particle, writing only that particle's force, torque and history
+(full neighbour list, no atomics). For each listed partner inside contact range it calls the
+contact law (`contact_laws.make_contact_response`); a partner out of range has its history
+cleared. Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is
+a plane with a velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Wall and tube contacts
+keep their history in a few slots per particle keyed by the surface index; a particle that
+touches more surfaces than it has slots is counted in `overflow[1]` (an error for the run).
+
+Gravity is added here: f_i = m_i g + sum of contact forces. `ovl[i]` receives the largest
+overlap of particle i relative to the smaller radius of the pair, `ncontact[i]` its number of
+contacts (coordination number).
+"""
+
+import taichi as ti
+
+from .contact_laws import make_contact_response
+from .geometry import make_geometry
+
+
+def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S, track_contact_time: bool = False):
+    """Return `compute_forces(n, t, dt)`."""
+    min_image, _wrap, _cc, _cid = make_geometry(grid)
+    respond = make_contact_response(law, rolling)
+    hysteretic = law == 2
+    g = ti.Vector(list(gravity))
+    n_surf = n_planes + n_tubes
+    zero3 = ti.Vector([0.0, 0.0, 0.0])
+
+    @ti.func
+    def surface_contact(i, s, t):
+        """Overlap, unit normal (particle -> surface) and surface velocity for surface s."""
+        xi = S.x[i]
+        r = S.radius[i]
+        delta = -1.0
+        n = ti.Vector([0.0, 0.0, 1.0])
+        u = zero3
+        if s < n_planes:
+            t0 = S.plane_t[s][0]
+            t1 = S.plane_t[s][1]
+            tc = ti.min(ti.max(t, t0), t1)
+            p = S.plane_p0[s] + S.plane_vel[s] * (tc - t0)
+            if t > t0 and t < t1:
+                u = S.plane_vel[s]
+            dist = (xi - p).dot(S.plane_n[s])
+            if dist > -r:
+                delta = r - dist
+                n = -S.plane_n[s]
+        else:
+            k = s - n_planes
+            d = min_image(xi - S.tube_c[k]) * S.tube_mask[k]
+            dist = d.norm()
+            if dist > 0.0:
+                delta = r + S.tube_r[k] - dist
+                n = -d / dist
+        return delta, n, u
+
+    @ti.kernel
+    def compute_forces(n: ti.i32, t: float, dt: float):
+        for i in range(n):
+            if S.active[i]:
+                xi = S.x[i]
+                ri = S.radius[i]
+                mi = S.mass[i]
+                wi = S.w[i]
+                vi = S.v[i]
+                mat_i = S.mat[i]
+                force = mi * g
+                torque = zero3
+                worst = 0.0
+                touching = 0
+                for k in range(S.nbr_n[i]):
+                    j = S.nbr[i, k]
+                    d = min_image(S.x[j] - xi)
+                    rj = S.radius[j]
+                    rsum = ri + rj
+                    dist2 = d.norm_sqr()
+                    if dist2 < rsum * rsum:
+                        dist = ti.sqrt(dist2)
+                        nrm = ti.Vector([0.0, 0.0, 1.0])
+                        if dist > 1e-12 * rsum:
+                            nrm = d / dist
+                        delta = rsum - dist
+                        v_rel = vi - S.v[j] + (ri * wi + rj * S.w[j]).cross(nrm)
+                        mj = S.mass[j]
+                        m_eff = mi * mj / (mi + mj)
+                        r_eff = ri * rj / rsum
+                        i_roll = 0.0
+                        if ti.static(rolling):
+                            ai = 1.4 * mi * ri * ri
+                            aj = 1.4 * mj * rj * rj
+                            i_roll = ai * aj / (ai + aj)
+                        dmax = 0.0
+                        if ti.static(hysteretic):
+                            dmax = S.dmax[i, k]
+                        mr = zero3
+                        if ti.static(rolling):
+                            mr = S.mr[i, k]
+                        f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                            nrm, delta, v_rel, wi - S.w[j], m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
+                            S.pp[mat_i, S.mat[j]], S.ft[i, k], mr, dmax, dt)
+                        force += f
+                        torque += (ri * nrm).cross(f_t) + m_roll
+                        S.ft[i, k] = xi_new
+                        if ti.static(rolling):
+                            S.mr[i, k] = mr_new
+                        if ti.static(hysteretic):
+                            S.dmax[i, k] = dmax_new
+                        worst = ti.max(worst, delta / ti.min(ri, rj))
+                        touching += 1
+                    else:
+                        S.ft[i, k] = zero3
+                        if ti.static(rolling):
+                            S.mr[i, k] = zero3
+                        if ti.static(hysteretic):
+                            S.dmax[i, k] = 0.0
+                for s in ti.static(range(n_surf)):
+                    delta, nrm, u = surface_contact(i, s, t)
+                    slot = -1
+                    for q in range(W):
+                        if S.wid[i, q] == s:
+                            slot = q
+                    if delta > 0.0:
+                        if slot < 0:
+                            for q in range(W):
+                                if slot < 0 and S.wid[i, q] < 0:
+                                    slot = q
+                                    S.wid[i, q] = s
+                                    S.wft[i, q] = zero3
+                                    if ti.static(rolling):
+                                        S.wmr[i, q] = zero3
+                                    if ti.static(hysteretic):
+                                        S.wdmax[i, q] = 0.0
+                        if slot < 0:
+                            ti.atomic_add(S.overflow[1], 1)
+                        else:
+                            v_rel = vi - u + (ri * wi).cross(nrm)
+                            dmax = 0.0
+                            if ti.static(hysteretic):
+                                dmax = S.wdmax[i, slot]
+                            mr = zero3
+                            if ti.static(rolling):
+                                mr = S.wmr[i, slot]
+                            f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                                nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
+                                S.ps[mat_i, s], S.wft[i, slot], mr, dmax, dt)
+                            force += f
+                            torque += (ri * nrm).cross(f_t) + m_roll
+                            S.wft[i, slot] = xi_new
+                            if ti.static(rolling):
+                                S.wmr[i, slot] = mr_new
+                            if ti.static(hysteretic):
+                                S.wdmax[i, slot] = dmax_new
+                            worst = ti.max(worst, delta / ri)
+                            touching += 1
+                    elif slot >= 0:
+                        S.wid[i, slot] = -1
+                S.f[i] = force
+                S.tq[i] = torque
+                S.ovl[i] = worst
+                if ti.static(track_contact_time):
+                    if touching > 0 and S.touch_start[i] < 0.0:
+                        S.touch_start[i] = t
+                    if touching == 0 and S.touch_start[i] >= 0.0 and S.touch_end[i] < 0.0:
+                        S.touch_end[i] = t
+                S.ncontact[i] = touching
+
+    return compute_forces

@@ -1,0 +1,120 @@
+"""Contact laws: normal, tangential and rolling sub-models as small Taichi functions.
+
+All laws share one calling convention, so that particle-particle, particle-wall and
+particle-tube contacts use the same code (`make_contact_response`):
+
+* geometry: unit normal `n` pointing from particle i to the other body, overlap `delta` > 0,
+  relative velocity of i's contact point against the other's `v_rel`, relative spin `w_rel`,
+  effective mass `m_eff`, effective radius `r_eff`, the two diameters (linear laws);
+* a parameter vector `p` (indices below) from the material-pair table built by `tidem.model`;
+* history: tangential spring `xi` [m], rolling spring moment `mr` [N m], maximum overlap
+  `dmax` [m] (hysteresis), each returned updated.
+
+Normal laws (F_n > 0 is repulsive):
+
+* linear spring-dashpot (source 1): F_n = k_n delta + eta_n v_n, k_n = E_i d_i E_j d_j /
+  (E_i d_i + E_j d_j) (source 3 eq. 26; a wall has d -> infinity, so k_n = E_i d_i),
+  eta_n = 2 gamma sqrt(k_n m_eff), gamma = -ln e / sqrt(ln^2 e + pi^2). The dashpot may pull
+  at the end of a contact; this keeps the restitution exactly e.
+* Hertz-Mindlin: F_n = 4/3 E* sqrt(R*) delta^1.5 + eta_n v_n, S_n = 2 E* sqrt(R* delta),
+  S_t = 8 G* sqrt(R* delta), eta = 2 sqrt(5/6) gamma sqrt(S m_eff) (Tsuji et al. 1992 form,
+  as in LIGGGHTS' hertz model).
+* linear hysteresis of Walton & Braun (source 3 eq. 26-28): loading with k_l, unloading and
+  reloading with k_ul = k_l / e^2 along F = k_ul (delta - delta_0), delta_0 = delta_max
+  (1 - k_l/k_ul); no attraction, floor 0.001 k_l delta; restitution sqrt(k_l/k_ul) = e.
+
+Tangential (source 3 eq. 29; Cundall-Strack spring with history): the spring `xi` is rotated
+into the current tangent plane keeping its length, grows by v_t dt, F_t = -k_t xi - eta_t v_t;
+when |F_t| > mu_s F_n the contact slides at mu_d F_n and the spring is reset to carry it.
+k_t = kappa k_n with the Mindlin ratio kappa = 2(1-nu)/(2-nu) for the linear laws.
+
+Rolling resistance, elastic-plastic spring-dashpot "model C" (source 3 eq. 30-33; Ai et al.
+2011): k_r = R*^2 k_n, M_s <- M_s - k_r w_roll dt capped at mu_r R* F_n; while below the cap a
+dashpot M_d = -eta_r 2 sqrt(I_r k_r) w_roll acts, I_r the effective rolling inertia.
+"""
+
+import taichi as ti
+
+# Indices into a material-pair parameter vector.
+ESTAR, GSTAR, GAMMA, KAPPA, MU_S, MU_D, MU_R, ETA_R, UNLOAD_RATIO, E_I, E_J = range(11)
+N_PARAMS = 11
+
+LINEAR, HERTZ, HYSTERETIC = 0, 1, 2
+LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC}
+
+
+@ti.func
+def rotate_into_plane(h, n):
+    """Project a history vector onto the plane normal to n, keeping its length."""
+    length = h.norm()
+    out = h - h.dot(n) * n
+    new_len = out.norm()
+    if new_len > 0.0:
+        out *= length / new_len
+    return out
+
+
+def make_contact_response(law: int, rolling: bool):
+    """Build the contact function for one normal law, with or without rolling resistance."""
+
+    @ti.func
+    def respond(n, delta, v_rel, w_rel, m_eff, r_eff, d_i, d_j, i_roll, p, xi, mr, dmax, dt):
+        v_n = v_rel.dot(n)  # approach speed, > 0 when closing
+        v_t = v_rel - v_n * n
+        f_n = 0.0
+        k_ref = 0.0  # stiffness for the tangential and rolling springs
+        eta_scale = 0.0
+        if ti.static(law == HERTZ):
+            root = ti.sqrt(r_eff * delta)
+            s_n = 2.0 * p[ESTAR] * root
+            f_n = 4.0 / 3.0 * p[ESTAR] * root * delta + 2.0 * ti.sqrt(5.0 / 6.0) * p[GAMMA] * ti.sqrt(s_n * m_eff) * v_n
+            k_ref = s_n
+            eta_scale = 2.0 * ti.sqrt(5.0 / 6.0)
+        else:
+            k_n = p[E_I] * d_i
+            if p[E_J] > 0.0:
+                k_n = p[E_I] * d_i * p[E_J] * d_j / (p[E_I] * d_i + p[E_J] * d_j)
+            k_ref = k_n
+            eta_scale = 2.0
+            if ti.static(law == LINEAR):
+                f_n = k_n * delta + 2.0 * p[GAMMA] * ti.sqrt(k_n * m_eff) * v_n
+            else:
+                k_ul = k_n * p[UNLOAD_RATIO]
+                dmax = ti.max(dmax, delta)
+                delta0 = dmax * (1.0 - 1.0 / p[UNLOAD_RATIO])
+                f_n = ti.min(k_n * delta, k_ul * (delta - delta0))
+                f_n = ti.max(f_n, 0.001 * k_n * delta)
+        f_pos = ti.max(f_n, 0.0)
+
+        # tangential spring with Coulomb cap
+        k_t = k_ref * p[KAPPA]
+        if ti.static(law == HERTZ):
+            k_t = 8.0 * p[GSTAR] * ti.sqrt(r_eff * delta)
+        eta_t = eta_scale * p[GAMMA] * ti.sqrt(k_t * m_eff)
+        xi = rotate_into_plane(xi, n) + v_t * dt
+        f_t = -k_t * xi - eta_t * v_t
+        ft_norm = f_t.norm()
+        if ft_norm > p[MU_S] * f_pos:
+            if ft_norm > 0.0:
+                f_t *= p[MU_D] * f_pos / ft_norm
+            if k_t > 0.0:
+                xi = -(f_t + eta_t * v_t) / k_t
+
+        # rolling resistance (model C)
+        m_roll = ti.Vector([0.0, 0.0, 0.0])
+        if ti.static(rolling):
+            w_roll = w_rel - w_rel.dot(n) * n
+            k_r = r_eff * r_eff * k_ref
+            mr = rotate_into_plane(mr, n) - k_r * w_roll * dt
+            m_lim = p[MU_R] * r_eff * f_pos
+            mr_norm = mr.norm()
+            if mr_norm > m_lim:
+                if mr_norm > 0.0:
+                    mr *= m_lim / mr_norm
+                m_roll = mr
+            else:
+                m_roll = mr - p[ETA_R] * 2.0 * ti.sqrt(i_roll * k_r) * w_roll
+        force = -f_n * n + f_t
+        return force, f_t, m_roll, xi, mr, dmax
+
+    return respond

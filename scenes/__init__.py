@@ -1,0 +1,1 @@
+"""Scenes shipped with tidem (TOML files); `tidem scenes` lists them."""

@@ -1,0 +1,140 @@
+"""Command-line interface: `tidem scene`, `tidem scenes`, `tidem check`, `tidem bench`.
+
+Errors in a scene exit with code 2 and one message listing every problem; a run that goes
+wrong (NaN, runaway overlap, capacity) exits with code 3 after saving what it finished;
+Ctrl-C exits with 130 after the same.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from tidem.scene.errors import SceneError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, help="tidem: hot granular flows in Taichi.")
+
+Sets = Annotated[Optional[list[str]], typer.Option("--set", help="Override a scene key, e.g. --set outlet.speed=0.003")]
+
+
+def _fail(message: str, code: int) -> None:
+    typer.echo(message, err=True)
+    raise typer.Exit(code)
+
+
+def _load(path: Optional[str], sets: Optional[list[str]]):
+    from tidem.scene.load import load
+
+    try:
+        return load(path, sets or [])
+    except SceneError as exc:
+        _fail(exc.render(), 2)
+
+
+def _model(loaded, smoke=False, t_end=None):
+    from tidem.model import build_model
+
+    try:
+        return build_model(loaded, smoke=smoke, t_end=t_end)
+    except SceneError as exc:
+        _fail(exc.render(), 2)
+
+
+@app.command()
+def scene(
+    path: Annotated[Optional[str], typer.Argument(help="Scene file, or the name of a shipped scene (default: the default scene)")] = None,
+    out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene name>)")] = None,
+    smoke: Annotated[bool, typer.Option(help="Run only numerics... output.smoke_steps steps (CI)")] = False,
+    t_end: Annotated[Optional[float], typer.Option("--t-end", help="End time [s], overrides numerics.t_end")] = None,
+    set_: Sets = None,
+    arch: Annotated[str, typer.Option(help="Taichi backend: cpu, cuda, vulkan or auto")] = "cpu",
+    quiet: Annotated[bool, typer.Option(help="No progress bar")] = False,
+):
+    """Run a scene: progress bar, snapshots, time series and run.json in the output folder."""
+    loaded = _load(path, set_)
+    from tidem.runtime import BackendUnavailable, ensure_taichi
+
+    try:
+        ensure_taichi(arch, loaded.scene.numerics.precision)
+    except (BackendUnavailable, KeyError) as exc:
+        _fail(f"--arch {arch}: {exc}", 2)
+    model = _model(loaded, smoke=smoke, t_end=t_end)
+    from tidem.run import run
+
+    out_dir = out or Path("renders") / model.name
+    typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
+               f"{f' (+{model.capacity - int(model.active0.sum())} to pour)' if model.pours else ''}, "
+               f"dt = {model.dt:.3g} s, t_end = {model.t_end:.4g} s -> {out_dir}", err=True)
+    result = run(model, out_dir, progress=not quiet)
+    s = result.summary
+    typer.echo(f"{result.status}: {s['steps']} steps in {s['wall_s']:.1f} s "
+               f"({s['particle_steps_per_s']:.3g} particle-steps/s); output in {out_dir}", err=True)
+    if result.status == "failed":
+        _fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
+    if result.status == "interrupted":
+        _fail(result.message + f"; finished output is in {out_dir}", 130)
+
+
+@app.command()
+def scenes():
+    """List the shipped scenes with a one-line description and the expected run time."""
+    import tomllib
+
+    from tidem.scene.load import DEFAULT_SCENE, shipped_scenes
+
+    for name, path in shipped_scenes().items():
+        raw = tomllib.loads(path.read_text())
+        mark = " (default)" if name == DEFAULT_SCENE else ""
+        typer.echo(f"{name}{mark}\n    {raw.get('description', '')}\n    run time: {raw.get('runtime', 'unknown')}")
+
+
+@app.command()
+def check(
+    path: Annotated[Optional[str], typer.Argument(help="Scene file or shipped scene name")] = None,
+    set_: Sets = None,
+):
+    """Validate a scene and print its derived numbers (particles, time steps, kernels, memory)."""
+    loaded = _load(path, set_)
+    model = _model(loaded)
+    f = model.features
+    mass = float(model.mass.sum())
+    sc = model.scales
+    lines = [
+        f"scene: {model.name} ({loaded.source})",
+        f"particles: {int(model.active0.sum())} at start, {model.capacity} in all, total mass {mass:.4g} kg",
+        f"diameter: {2 * model.radius.min():.4g} .. {2 * model.radius.max():.4g} m",
+        f"contact law: {loaded.scene.contact.model}; rolling resistance: {'on' if f.rolling else 'off'}",
+        f"Rayleigh time {sc.rayleigh:.4g} s, contact time {sc.contact:.4g} s, stability limit {sc.limit:.4g} s",
+        f"time step: {model.dt:.4g} s ({model.t_end / model.dt:.3g} steps to t_end = {model.t_end:g} s)",
+        f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
+        f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
+        f"kernels: {', '.join(f.kernels())}",
+        f"memory (fields): {model.memory_bytes() / 2**20:.1f} MiB, {model.memory_bytes() / model.capacity:.0f} B/particle",
+    ]
+    typer.echo("\n".join(lines))
+
+
+@app.command()
+def bench(
+    sizes: Annotated[str, typer.Option(help="Comma-separated particle counts")] = "10000,50000,200000",
+    precision: Annotated[str, typer.Option(help="float32, float64 or both")] = "both",
+    steps: Annotated[int, typer.Option(help="Timed steps per case (scaled down for large N)")] = 2000,
+    threads: Annotated[int, typer.Option(help="CPU threads")] = 2,
+    out: Annotated[Optional[Path], typer.Option(help="Write results as JSON here")] = None,
+):
+    """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history)."""
+    from tidem.bench import run_matrix
+
+    run_matrix([int(s) for s in sizes.split(",")], ["float32", "float64"] if precision == "both" else [precision],
+               steps, threads, out)
+
+
+def main() -> None:  # pragma: no cover
+    app(prog_name="tidem")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

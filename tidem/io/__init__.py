@@ -1,0 +1,1 @@
+"""Run output: ParaView snapshots, time series, run summary."""

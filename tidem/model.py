@@ -1,0 +1,328 @@
+"""The Model: everything about a run that does not change while it runs, derived once from a
+validated scene (sizes, masses, material-pair table, walls, tubes, grid, time step, flags).
+Plain numpy and numbers only; `tidem.state` turns them into Taichi fields.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from tidem.kernels import contact_laws as cl
+from tidem.kernels.geometry import Grid
+from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
+from tidem.scene.checks import max_diameter
+from tidem.scene.errors import SceneError
+from tidem.scene.load import LoadedScene
+from tidem.timestep import TimeScales, time_scales
+
+AXES = "xyz"
+NEVER = 1e30
+
+
+@dataclass(frozen=True)
+class Features:
+    """What the scene needs compiled: the one place scene physics becomes kernel flags."""
+
+    law: int
+    rolling: bool
+    hysteretic: bool
+    n_planes: int
+    n_tubes: int
+    recycle: bool
+    contact_time: bool
+    precision: str
+
+    def kernels(self) -> list[str]:
+        law = {cl.LINEAR: "linear", cl.HERTZ: "hertz_mindlin", cl.HYSTERETIC: "hysteretic"}[self.law]
+        out = ["integrate", "broadphase(cell grid + Verlet list)", f"contact({law}, tangential history)"]
+        if self.rolling:
+            out.append("rolling resistance (model C)")
+        if self.n_planes:
+            out.append(f"plane walls ({self.n_planes})")
+        if self.n_tubes:
+            out.append(f"tubes ({self.n_tubes})")
+        if self.recycle:
+            out.append("outlet recycle")
+        if self.contact_time:
+            out.append("contact-time observer")
+        return out
+
+
+@dataclass
+class Model:
+    """Constant data of a run. Per-particle arrays have shape [capacity]."""
+
+    name: str
+    loaded: LoadedScene
+    features: Features
+    grid: Grid
+    capacity: int
+    radius: np.ndarray
+    mass: np.ndarray
+    material: np.ndarray
+    group: np.ndarray
+    x0: np.ndarray
+    v0: np.ndarray
+    active0: np.ndarray
+    pair_params: np.ndarray
+    surface_params: np.ndarray
+    planes: list[dict]
+    tubes: list[dict]
+    pours: list[dict]
+    dt: float
+    scales: TimeScales
+    skin: float
+    max_neighbors: int
+    wall_slots: int
+    t_end: float
+    gravity: tuple[float, float, float]
+
+    @property
+    def scene(self):
+        return self.loaded.scene
+
+    def memory_bytes(self) -> int:
+        """Expected memory of the Taichi fields [bytes] (see `tidem.state.State`)."""
+        fp = 8 if self.features.precision == "float64" else 4
+        k, w = self.max_neighbors, self.wall_slots
+        per = fp * (3 * 7 + 6) + 4 * 6  # vectors x v w f tq x_build + scalars; ints
+        per += k * (4 * 3 + 3 * fp)  # nbr, nbr_new, src, ft
+        per += w * (4 + 3 * fp)
+        if self.features.rolling:
+            per += 3 * fp * (k + w)
+        if self.features.hysteretic:
+            per += fp * (k + w)
+        cells = self.grid.n_cells * 4 * 3
+        return per * self.capacity + cells
+
+
+def _pair_vector(a, b, wall_friction=None) -> np.ndarray:
+    """Parameters of a contact between materials a and b (indices in `contact_laws`).
+
+    E* and G* combine both bodies; restitution, friction and rolling values are the mean of
+    the two materials, except that a wall's or tube's own `friction` replaces both frictions.
+    """
+    p = np.zeros(cl.N_PARAMS)
+    e_star = 1.0 / ((1 - a.poisson_ratio**2) / a.youngs_modulus + (1 - b.poisson_ratio**2) / b.youngs_modulus)
+    g_a = a.youngs_modulus / (2 * (1 + a.poisson_ratio))
+    g_b = b.youngs_modulus / (2 * (1 + b.poisson_ratio))
+    g_star = 1.0 / ((2 - a.poisson_ratio) / g_a + (2 - b.poisson_ratio) / g_b)
+    e = 0.5 * (a.restitution + b.restitution)
+    ln_e = math.log(e) if e < 1.0 else 0.0
+    nu = 0.5 * (a.poisson_ratio + b.poisson_ratio)
+    dyn_a = a.friction if a.dynamic_friction is None else a.dynamic_friction
+    dyn_b = b.friction if b.dynamic_friction is None else b.dynamic_friction
+    mu_s = 0.5 * (a.friction + b.friction) if wall_friction is None else wall_friction
+    mu_d = 0.5 * (dyn_a + dyn_b) if wall_friction is None else wall_friction
+    p[cl.ESTAR] = e_star
+    p[cl.GSTAR] = g_star
+    p[cl.GAMMA] = -ln_e / math.sqrt(ln_e**2 + math.pi**2)
+    p[cl.KAPPA] = 2 * (1 - nu) / (2 - nu)
+    p[cl.MU_S] = mu_s
+    p[cl.MU_D] = mu_d
+    p[cl.MU_R] = 0.5 * (a.rolling_friction + b.rolling_friction)
+    p[cl.ETA_R] = 0.5 * (a.rolling_damping + b.rolling_damping)
+    p[cl.UNLOAD_RATIO] = 1.0 / e**2
+    p[cl.E_I] = a.youngs_modulus
+    p[cl.E_J] = b.youngs_modulus
+    return p
+
+
+def _surfaces(scene, mats: dict, default_mat: str):
+    """Planes (box sides, walls, outlet plate) and tubes with their materials and friction."""
+    dom = scene.domain
+    planes: list[dict] = []
+    for side in dom.wall_sides():
+        a = AXES.index(side[0])
+        n = [0.0, 0.0, 0.0]
+        p0 = [0.0, 0.0, 0.0]
+        if side[1] == "-":
+            n[a], p0[a] = 1.0, dom.min[a]
+        else:
+            n[a], p0[a] = -1.0, dom.max[a]
+        if side == "z-" and scene.outlet is not None and scene.outlet.type == "moving_plate":
+            continue  # the plate is the floor
+        planes.append(dict(name=f"box {side}", p0=p0, n=n, vel=[0.0] * 3, t=(0.0, NEVER),
+                           material=dom.wall_material or default_mat, friction=dom.wall_friction))
+    for i, w in enumerate(scene.walls):
+        n = np.asarray(w.normal, float)
+        planes.append(dict(name=f"walls[{i}]", p0=list(w.point), n=list(n / np.linalg.norm(n)), vel=list(w.velocity),
+                           t=(0.0, NEVER), material=w.material or default_mat, friction=w.friction))
+    if scene.outlet is not None and scene.outlet.type == "moving_plate":
+        o = scene.outlet
+        h = dom.min[2] if o.height is None else o.height
+        stop = dom.min[2] if o.stop_height is None else o.stop_height
+        t1 = o.start + max(h - stop, 0.0) / o.speed
+        planes.append(dict(name="outlet plate", p0=[0.0, 0.0, h], n=[0.0, 0.0, 1.0], vel=[0.0, 0.0, -o.speed],
+                           t=(o.start, t1), material=o.material or default_mat, friction=o.friction))
+    tubes = []
+    for i, t in enumerate(scene.tubes):
+        mask = [0.0 if AXES[a] == t.axis else 1.0 for a in range(3)]
+        tubes.append(dict(name=f"tubes[{i}]", c=list(t.center), mask=mask, r=0.5 * t.diameter,
+                          material=t.material or default_mat, friction=t.friction))
+    return planes, tubes
+
+
+def _largest(dist) -> float:
+    """Largest diameter a distribution can produce (its cut-off)."""
+    if dist.distribution == "mono":
+        return dist.value
+    if dist.distribution == "uniform":
+        return dist.max
+    return dist.max if dist.max is not None else (dist.mean + 4 * dist.std if dist.distribution == "normal" else dist.median * np.exp(4 * dist.sigma))
+
+
+def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = None) -> Model:
+    """Derive the Model from a validated scene; raises SceneError for problems found here."""
+    scene = loaded.scene
+    src = str(loaded.source)
+    dom = scene.domain
+    mats = scene.materials
+    mat_names = list(mats)
+    default_mat = scene.particles[0].material
+    planes, tubes = _surfaces(scene, mats, default_mat)
+    periodic = tuple(AXES[a] in dom.periodic for a in range(3))
+    lengths = [dom.max[a] - dom.min[a] for a in range(3)]
+
+    radius, material, group, x0, v0, active0, pours = [], [], [], [], [], [], []
+    errors: list[str] = []
+    offset = 0
+    for gi, g in enumerate(scene.particles):
+        rng = np.random.default_rng(g.seed)
+        key = f"particles[{gi}]"
+        if g.positions is not None:
+            count = len(g.positions)
+        elif g.count is not None:
+            count = g.count
+        else:
+            count = None  # fill every free lattice site of the region
+        if g.region is not None:
+            spacing = 1.02 * _largest(g.diameter)
+            sites = lattice_sites(g.region.min, g.region.max, spacing)
+            plane_geo = [(p["p0"], p["n"]) for p in planes]
+            tube_geo = [(t["c"], t["mask"], t["r"]) for t in tubes]
+            sites = sites[clear_of_obstacles(sites, 0.5 * spacing, plane_geo, tube_geo, lengths, periodic)]
+            if count is None:
+                count = len(sites)
+            if len(sites) == 0 or len(sites) < count:
+                errors.append(
+                    f"{key}: the region holds at most {len(sites)} particles of diameter {spacing / 1.02:g} m clear of "
+                    f"walls and tubes, but {count} were asked for; enlarge 'region' or lower 'count'"
+                )
+                continue
+        try:
+            d = sample_diameters(g.diameter, count, rng)
+        except PlacementError as exc:
+            errors.append(f"{key}.diameter: {exc}")
+            continue
+        if g.positions is not None:
+            pos = np.asarray(g.positions, float)
+            vel = np.asarray(g.velocities, float) if g.velocities is not None else np.tile(g.velocity, (count, 1))
+            act = np.ones(count, bool)
+        elif g.region is not None:
+            # fill bottom-up; random order within each layer
+            layer = np.round((sites[:, 2] - sites[0, 2]) / spacing).astype(int)
+            order = np.lexsort((rng.random(len(sites)), layer))
+            pos = sites[order[:count]] + rng.uniform(-0.01, 0.01, (count, 3)) * spacing
+            vel = np.tile(g.velocity, (count, 1))
+            act = np.ones(count, bool)
+        else:
+            pos = np.zeros((count, 3))
+            vel = np.tile(g.velocity, (count, 1))
+            act = np.zeros(count, bool)
+            pours.append(dict(first=offset, count=count, region=g.pour.region, rate=g.pour.rate, start=g.pour.start,
+                              seed=g.seed, inserted=0, key=key))
+        radius.append(0.5 * d)
+        material.append(np.full(count, mat_names.index(g.material), np.int32))
+        group.append(np.full(count, gi, np.int32))
+        x0.append(pos)
+        v0.append(vel)
+        active0.append(act)
+        offset += count
+    if errors:
+        raise SceneError(src, errors)
+
+    radius = np.concatenate(radius)
+    material = np.concatenate(material)
+    density = np.array([mats[m].density for m in mat_names])[material]
+    mass = density * 4.0 / 3.0 * math.pi * radius**3
+
+    # material-pair and material-surface parameter tables
+    P = len(mat_names)
+    pair = np.zeros((P, P, cl.N_PARAMS))
+    for a, na in enumerate(mat_names):
+        for b, nb in enumerate(mat_names):
+            pair[a, b] = _pair_vector(mats[na], mats[nb])
+    surfaces = planes + tubes
+    surf = np.zeros((P, max(len(surfaces), 1), cl.N_PARAMS))
+    for a, na in enumerate(mat_names):
+        for s, sd in enumerate(surfaces):
+            surf[a, s] = _pair_vector(mats[na], mats[sd["material"]], sd["friction"])
+            surf[a, s, cl.E_J] = 0.0  # a wall is a body of infinite size for the linear laws
+
+    # time step from the stiffest, lightest contact
+    law = scene.contact.model
+    speed = scene.numerics.impact_velocity
+    if speed is None:
+        vmax = max([float(np.linalg.norm(v, axis=1).max()) if len(v) else 0.0 for v in v0] + [0.0])
+        height = dom.max[2] - dom.min[2]
+        speed = max(2.0 * vmax, math.sqrt(2.0 * abs(dom.gravity[2]) * height), 0.01)
+    scales = None
+    for mi, mname in enumerate(mat_names):
+        sel = material == mi
+        if not sel.any():
+            continue
+        m = mats[mname]
+        e_min = min(m.restitution, *[mats[s["material"]].restitution for s in surfaces]) if surfaces else m.restitution
+        ts = time_scales(law, 2.0 * radius[sel].min(), m.density, m.youngs_modulus, m.poisson_ratio, e_min, speed)
+        if scales is None or ts.limit < scales.limit:
+            scales = ts
+    num = scene.numerics
+    if num.dt is not None:
+        dt = num.dt
+        if dt > scales.limit and not num.force_dt:
+            raise SceneError(src, [
+                f"numerics.dt: {dt:g} s is above the stability limit {scales.limit:.3g} s of the stiffest contact "
+                f"(Rayleigh time {scales.rayleigh:.3g} s, contact time {scales.contact:.3g} s); use dt <= {scales.limit:.3g}, "
+                "leave dt out to get dt_fraction * min(Rayleigh, contact time), or set numerics.force_dt = true"])
+    else:
+        dt = num.dt_fraction * scales.reference
+        if dt > scales.limit and not num.force_dt:
+            raise SceneError(src, [
+                f"numerics.dt_fraction: {num.dt_fraction} gives dt = {dt:.3g} s, above the stability limit "
+                f"{scales.limit:.3g} s; use dt_fraction <= {scales.limit / scales.reference:.2f} or set numerics.force_dt = true"])
+
+    d_max = max_diameter(scene)
+    d_min = 2.0 * radius.min()
+    skin = num.skin * d_max
+    reach = d_max + skin
+    cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
+    while np.prod(cells) > max(64 * len(radius), 1 << 20):
+        cells = [max(1, c // 2) for c in cells]
+    grid = Grid(lo=tuple(dom.min), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
+    ratio = d_max / d_min
+    k = num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + num.skin) ** 3))
+
+    features = Features(
+        law=cl.LAW_IDS[law],
+        rolling=any(mats[m].rolling_friction > 0 for m in mat_names),
+        hysteretic=law == "hysteretic",
+        n_planes=len(planes),
+        n_tubes=len(tubes),
+        recycle=scene.outlet is not None and scene.outlet.type == "recycle",
+        contact_time="contact_time" in scene.observables,
+        precision=num.precision,
+    )
+    end = t_end if t_end is not None else num.t_end
+    if smoke:
+        end = min(end, scene.output.smoke_steps * dt)
+    return Model(
+        name=loaded.name, loaded=loaded, features=features, grid=grid, capacity=len(radius), radius=radius, mass=mass,
+        material=material, group=np.concatenate(group), x0=np.concatenate(x0), v0=np.concatenate(v0),
+        active0=np.concatenate(active0), pair_params=pair, surface_params=surf, planes=planes, tubes=tubes,
+        pours=pours, dt=dt, scales=scales, skin=skin, max_neighbors=k, wall_slots=num.max_wall_contacts,
+        t_end=end, gravity=tuple(dom.gravity),
+    )

@@ -1,0 +1,103 @@
+"""Checks that span several tables of a validated scene; each returns messages, never raises."""
+
+from __future__ import annotations
+
+from tidem.scene.schema import Scene
+
+AXES = "xyz"
+
+
+def max_diameter(scene: Scene) -> float:
+    """Largest particle diameter the scene can produce [m] (cut-offs of open distributions)."""
+    out = 0.0
+    for g in scene.particles:
+        d = g.diameter
+        if d.distribution == "mono":
+            out = max(out, d.value)
+        elif d.distribution == "normal":
+            out = max(out, d.max if d.max is not None else d.mean)
+        elif d.distribution == "lognormal":
+            out = max(out, d.max if d.max is not None else d.median)
+        else:
+            out = max(out, d.max)
+    return out
+
+
+def cross_checks(scene: Scene) -> list[str]:
+    """All problems that a single table cannot see, as 'key.path: message' lines."""
+    errs: list[str] = []
+    dom = scene.domain
+    mats = scene.materials
+
+    def need_material(path: str, name: str | None) -> None:
+        if name is not None and name not in mats:
+            errs.append(f"{path}: no material named '{name}'; defined: {', '.join(mats) or 'none'}")
+
+    if not mats:
+        errs.append("materials: define at least one material, e.g. [materials.sand]")
+    need_material("domain.wall_material", dom.wall_material)
+    if len(set(dom.periodic)) != len(dom.periodic):
+        errs.append("domain.periodic: an axis is listed twice")
+    if isinstance(dom.walls, list):
+        for side in dom.walls:
+            if side[0] in dom.periodic:
+                errs.append(f"domain.walls: side '{side}' lies on the periodic axis {side[0]}; remove one of them")
+
+    names = [g.name for g in scene.particles]
+    for i, g in enumerate(scene.particles):
+        p = f"particles[{i}]"
+        if names.count(g.name) > 1:
+            errs.append(f"{p}.name: '{g.name}' is used by more than one group")
+        need_material(f"{p}.material", g.material)
+        d = g.diameter
+        if d.distribution == "uniform" and d.max <= d.min:
+            errs.append(f"{p}.diameter: max ({d.max}) must be greater than min ({d.min})")
+        if d.distribution in ("normal", "lognormal"):
+            if d.sigma if d.distribution == "lognormal" else d.std:
+                if d.max is None:
+                    errs.append(f"{p}.diameter.max: a {d.distribution} distribution needs an upper cut-off 'max' (the neighbour search is sized from it)")
+            if d.min is not None and d.max is not None and d.max <= d.min:
+                errs.append(f"{p}.diameter: max ({d.max}) must be greater than min ({d.min})")
+        for key, box in (("region", g.region), ("pour.region", g.pour.region if g.pour else None)):
+            if box is not None and not dom.contains(box):
+                errs.append(f"{p}.{key}: the box {list(box.min)}..{list(box.max)} reaches outside the domain {list(dom.min)}..{list(dom.max)}")
+        for k, x in enumerate(g.positions or []):
+            if any(c < lo or c > hi for c, lo, hi in zip(x, dom.min, dom.max)):
+                errs.append(f"{p}.positions[{k}]: {list(x)} lies outside the domain")
+
+    for i, w in enumerate(scene.walls):
+        need_material(f"walls[{i}].material", w.material)
+    for i, t in enumerate(scene.tubes):
+        need_material(f"tubes[{i}].material", t.material)
+        across = [a for a in range(3) if AXES[a] != t.axis]
+        r = 0.5 * t.diameter
+        for a in across:
+            if AXES[a] in dom.periodic:
+                continue
+            if t.center[a] - r < dom.min[a] or t.center[a] + r > dom.max[a]:
+                errs.append(
+                    f"tubes[{i}] lies outside the domain: along {AXES[a]} it spans "
+                    f"{t.center[a] - r:g}..{t.center[a] + r:g} m, the domain {dom.min[a]:g}..{dom.max[a]:g} m"
+                )
+    if scene.outlet is not None:
+        o = scene.outlet
+        need_material("outlet.material", o.material)
+        h = dom.min[2] if o.height is None else o.height
+        if not dom.min[2] <= h <= dom.max[2]:
+            errs.append(f"outlet.height: {h} lies outside the domain's z range {dom.min[2]}..{dom.max[2]}")
+        if o.type == "recycle" and o.reinsert_height is not None and not dom.min[2] < o.reinsert_height < dom.max[2]:
+            errs.append(f"outlet.reinsert_height: {o.reinsert_height} lies outside the domain's z range")
+        if o.type == "moving_plate" and "z" in dom.periodic:
+            errs.append("outlet: a moving plate needs a non-periodic z axis; remove 'z' from domain.periodic")
+
+    dmax = max_diameter(scene)
+    cell = dmax * (1.0 + scene.numerics.skin)
+    for ax in dom.periodic:
+        a = AXES.index(ax)
+        length = dom.max[a] - dom.min[a]
+        if dmax > 0 and length < 3 * cell:
+            errs.append(
+                f"domain.periodic: the domain is {length:g} m long along periodic axis {ax}, "
+                f"less than 3 search cells ({3 * cell:g} m); make it longer or drop '{ax}' from periodic"
+            )
+    return errs

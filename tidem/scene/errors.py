@@ -1,0 +1,145 @@
+"""Turn pydantic's validation errors into one line per problem: key path, what is wrong, the fix."""
+
+from __future__ import annotations
+
+import difflib
+import re
+import typing
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+_DISTRIBUTIONS = {"mono", "uniform", "normal", "lognormal"}
+
+# SI factors for the units people write by habit; used only to suggest the number to write.
+_UNITS = {
+    "mm": 1e-3, "cm": 1e-2, "m": 1.0, "um": 1e-6, "µm": 1e-6, "micron": 1e-6,
+    "mm/s": 1e-3, "cm/s": 1e-2, "m/s": 1.0,
+    "s": 1.0, "ms": 1e-3, "us": 1e-6,
+    "kg/m3": 1.0, "g/cm3": 1e3, "pa": 1.0, "kpa": 1e3, "mpa": 1e6, "gpa": 1e9,
+    "kg": 1.0, "g": 1e-3,
+}
+
+
+class SceneError(Exception):
+    """A scene file that cannot be run; `messages` holds one line per problem."""
+
+    def __init__(self, source: str, messages: list[str]):
+        self.source = source
+        self.messages = messages
+        super().__init__(self.render())
+
+    def render(self) -> str:
+        n = len(self.messages)
+        head = f"{self.source}: {n} error{'s' if n != 1 else ''} in the scene"
+        return "\n".join([head] + [f"  {m}" for m in self.messages])
+
+
+def key_path(loc: tuple) -> str:
+    """('tubes', 1, 'diameter') -> 'tubes[1].diameter'; drops pydantic's union tags."""
+    out = ""
+    prev = None
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif prev == "diameter" and part in _DISTRIBUTIONS:
+            pass
+        elif "[" in part or "(" in part or part in ("float", "int", "str", "bool"):
+            pass
+        else:
+            out += ("." if out else "") + part
+        prev = part
+    return out
+
+
+def _unit_hint(value: str) -> str:
+    m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([a-zA-Zµ/0-9]+)\s*", value)
+    if not m:
+        return "write a plain number in SI units"
+    try:
+        number = float(m.group(1))
+    except ValueError:
+        return "write a plain number in SI units"
+    unit = m.group(2).lower()
+    if unit == "c" or unit == "degc":
+        return f"temperatures are in kelvin: write {number + 273.15:g}"
+    if unit in _UNITS:
+        return f"units are SI: write {number * _UNITS[unit]:g}"
+    return "write a plain number in SI units"
+
+
+def _model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
+    """The pydantic model class that owns the last key of `loc`, if one can be found."""
+    cls: Any = root
+    for part in loc[:-1]:
+        cls = _unwrap(cls)
+        if isinstance(part, int) or cls is None:
+            continue
+        if isinstance(cls, type) and issubclass(cls, BaseModel):
+            field = cls.model_fields.get(part)
+            if field is None:
+                if part in _DISTRIBUTIONS:
+                    continue
+                return None
+            cls = field.annotation
+        elif typing.get_origin(cls) is dict:
+            cls = typing.get_args(cls)[1]
+    cls = _unwrap(cls)
+    return cls if isinstance(cls, type) and issubclass(cls, BaseModel) else None
+
+
+def _unwrap(cls: Any) -> Any:
+    """Strip Optional/list/union wrappers down to a single model class where there is one."""
+    for _ in range(4):
+        origin = typing.get_origin(cls)
+        if origin in (list, tuple):
+            cls = typing.get_args(cls)[0]
+        elif origin in (typing.Union, getattr(__import__("types"), "UnionType")):
+            models = [a for a in typing.get_args(cls) if isinstance(a, type) and issubclass(a, BaseModel)]
+            if len(models) == 1:
+                cls = models[0]
+            else:
+                return models[0] if models else None
+        else:
+            break
+    return cls
+
+
+def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list[str]:
+    """One message per pydantic error, each naming the key path and the fix."""
+    lines: list[str] = []
+    seen: set[str] = set()
+    for e in err.errors(include_url=False):
+        loc = tuple(e["loc"])
+        path = key_path(loc)
+        kind = e["type"]
+        value = e.get("input")
+        if kind == "extra_forbidden":
+            owner = _model_at(root, loc)
+            name = str(loc[-1])
+            hint = ""
+            if owner is not None:
+                close = difflib.get_close_matches(name, list(owner.model_fields), n=1, cutoff=0.6)
+                hint = f"; did you mean '{close[0]}'?" if close else f"; valid keys: {', '.join(owner.model_fields)}"
+            msg = f"{path}: unknown key '{name}'{hint}"
+        elif kind == "missing":
+            msg = f"{path}: required key is missing"
+        elif kind in ("float_type", "int_type", "finite_number") and isinstance(value, str):
+            msg = f"{path}: expected a number, got the text {value!r}; {_unit_hint(value)}"
+        elif kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
+            op = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}[kind]
+            bound = next(iter(e.get("ctx", {}).values()), "?")
+            msg = f"{path}: must be {op} {bound} (got {value})"
+        elif kind == "literal_error":
+            msg = f"{path}: {e['msg'].lower()} (got {value!r})"
+        elif kind == "union_tag_invalid":
+            msg = f"{path}: distribution must be one of mono, uniform, normal, lognormal (got {value.get('distribution') if isinstance(value, dict) else value!r})"
+        elif kind == "value_error":
+            msg = f"{path}: {str(e.get('ctx', {}).get('error', e['msg']))}"
+        else:
+            shown = "" if isinstance(value, dict) else f" (got {value!r})"
+            msg = f"{path}: {e['msg'][0].lower() + e['msg'][1:]}{shown}"
+        if msg not in seen:
+            seen.add(msg)
+            lines.append(msg)
+    return lines

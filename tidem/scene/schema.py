@@ -1,0 +1,220 @@
+"""The scene file, as a strict pydantic schema.
+
+Every table forbids unknown keys; every number is SI. `docs/scenes.md` documents each key
+with its unit and default, and `tests/scene/test_docs.py` checks that nothing is missing.
+Checks that span tables (a tube outside the domain, an unknown material name) live in
+`tidem.scene.checks`, so that all errors of a file are reported together.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from tidem.scene.types import Box, Fraction, NonNegative, Number, Positive, Strict, Vec3
+
+Axis = Literal["x", "y", "z"]
+Side = Literal["x-", "x+", "y-", "y+", "z-", "z+"]
+
+
+class Domain(Box):
+    """The simulation box, its periodic axes, its walls and gravity."""
+
+    periodic: list[Axis] = []
+    walls: Literal["auto", "none"] | list[Side] = "auto"
+    wall_material: str | None = None
+    wall_friction: NonNegative | None = None
+    gravity: Vec3 = (0.0, 0.0, -9.81)
+
+    def wall_sides(self) -> list[str]:
+        """Box sides that carry a wall: 'auto' means every side of a non-periodic axis but the top."""
+        if self.walls == "none":
+            return []
+        if self.walls == "auto":
+            return [f"{ax}{s}" for ax in "xyz" if ax not in self.periodic for s in "-+" if f"{ax}{s}" != "z+"]
+        return list(self.walls)
+
+
+class Material(Strict):
+    """Solid properties of particles, walls and tubes."""
+
+    density: Positive
+    youngs_modulus: Positive
+    poisson_ratio: Number = Field(default=0.3, ge=0.0, lt=0.5)
+    restitution: Fraction = 0.5
+    friction: NonNegative = 0.5
+    dynamic_friction: NonNegative | None = None
+    rolling_friction: NonNegative = 0.0
+    rolling_damping: NonNegative = Field(default=0.3, le=1.0)
+
+    @model_validator(mode="after")
+    def _dynamic_below_static(self):
+        if self.dynamic_friction is not None and self.dynamic_friction > self.friction:
+            raise ValueError(
+                f"dynamic_friction ({self.dynamic_friction}) must not exceed friction ({self.friction})"
+            )
+        return self
+
+
+class Mono(Strict):
+    distribution: Literal["mono"] = "mono"
+    value: Positive
+
+
+class Uniform(Strict):
+    distribution: Literal["uniform"]
+    min: Positive
+    max: Positive
+
+
+class Normal(Strict):
+    distribution: Literal["normal"]
+    mean: Positive
+    std: NonNegative
+    min: Positive | None = None
+    max: Positive | None = None
+
+
+class LogNormal(Strict):
+    distribution: Literal["lognormal"]
+    median: Positive
+    sigma: NonNegative
+    min: Positive | None = None
+    max: Positive | None = None
+
+
+Diameter = Mono | Uniform | Normal | LogNormal
+
+
+class Pour(Strict):
+    """Particles appear over time at random places in a region."""
+
+    region: Box
+    rate: Positive
+    start: NonNegative = 0.0
+
+
+class ParticleGroup(Strict):
+    """A set of particles of one material and one size distribution."""
+
+    name: str
+    material: str
+    diameter: Diameter = Field(discriminator="distribution")
+    count: int | None = Field(default=None, gt=0)
+    region: Box | None = None
+    positions: list[Vec3] | None = None
+    pour: Pour | None = None
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+    velocities: list[Vec3] | None = None
+    seed: int = 0
+
+    @model_validator(mode="after")
+    def _placement(self):
+        ways = sum(x is not None for x in (self.region, self.positions, self.pour))
+        if ways != 1:
+            raise ValueError("give exactly one of 'region' (fill at start), 'positions' or 'pour'")
+        if self.positions is not None and self.count is not None and self.count != len(self.positions):
+            raise ValueError(f"count ({self.count}) differs from the number of positions ({len(self.positions)})")
+        if self.pour is not None and self.count is None:
+            raise ValueError("a poured group needs 'count' (the number of particles to pour)")
+        if self.velocities is not None:
+            if self.positions is None or len(self.velocities) != len(self.positions):
+                raise ValueError("'velocities' needs 'positions' of the same length")
+        return self
+
+
+class Wall(Strict):
+    """An infinite plane; `normal` points into the region the particles occupy."""
+
+    point: Vec3
+    normal: Vec3
+    material: str | None = None
+    friction: NonNegative | None = None
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _unit(self):
+        if sum(c * c for c in self.normal) == 0:
+            raise ValueError("normal must not be the zero vector")
+        return self
+
+
+class Tube(Strict):
+    """An immersed horizontal tube (infinite cylinder along a horizontal axis)."""
+
+    center: Vec3
+    axis: Literal["x", "y"] = "y"
+    diameter: Positive
+    material: str | None = None
+    friction: NonNegative | None = None
+
+
+class Outlet(Strict):
+    """How the bed leaves the domain."""
+
+    type: Literal["moving_plate", "recycle"]
+    speed: Positive | None = None
+    start: NonNegative = 0.0
+    height: Number | None = None
+    stop_height: Number | None = None
+    reinsert_height: Number | None = None
+    material: str | None = None
+    friction: NonNegative | None = None
+
+    @model_validator(mode="after")
+    def _needs(self):
+        if self.type == "moving_plate" and self.speed is None:
+            raise ValueError("a moving_plate outlet needs 'speed' (plate speed downwards, m/s)")
+        if self.type == "recycle" and (self.height is None or self.reinsert_height is None):
+            raise ValueError("a recycle outlet needs 'height' and 'reinsert_height'")
+        return self
+
+
+class Contact(Strict):
+    """The contact law between particles and with walls and tubes."""
+
+    model: Literal["hertz_mindlin", "linear", "hysteretic"] = "hertz_mindlin"
+
+
+class Numerics(Strict):
+    """Time stepping, precision and the neighbour search."""
+
+    t_end: Positive = 1.0
+    dt: Positive | None = None
+    dt_fraction: Number = Field(default=0.2, gt=0, le=1.0)
+    force_dt: bool = False
+    impact_velocity: Positive | None = None
+    precision: Literal["float32", "float64"] = "float64"
+    skin: Number = Field(default=0.1, ge=0.0, le=2.0)
+    max_neighbors: int | None = Field(default=None, ge=4, le=512)
+    max_wall_contacts: int = Field(default=4, ge=1, le=32)
+    max_overlap: Number = Field(default=0.05, gt=0, le=0.5)
+    check_interval: int = Field(default=100, ge=1)
+
+
+class Output(Strict):
+    """What a run writes and how often."""
+
+    interval: Positive | None = None
+    snapshots: int = Field(default=50, ge=1)
+    timeseries_interval: Positive | None = None
+    smoke_steps: int = Field(default=300, ge=1)
+
+
+class Scene(Strict):
+    """A whole scene file."""
+
+    name: str | None = None
+    description: str = ""
+    runtime: str = ""
+    domain: Domain
+    contact: Contact = Contact()
+    materials: dict[str, Material]
+    particles: list[ParticleGroup]
+    walls: list[Wall] = []
+    tubes: list[Tube] = []
+    outlet: Outlet | None = None
+    numerics: Numerics = Numerics()
+    output: Output = Output()
+    observables: list[Literal["contact_time"]] = []

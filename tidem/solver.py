@@ -1,0 +1,116 @@
+"""The Solver: builds the kernels a scene needs and advances the state one step at a time.
+
+`step()` is a short list of kernel launches and makes no physics decisions: kick-drift,
+neighbour rebuild when a particle moved more than half the skin (or particles appeared),
+forces, kick. Health checks (NaN, runaway overlap, capacity overflow) run every
+`numerics.check_interval` steps and raise `RunError` naming the particle and the fix.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tidem.kernels.broadphase import make_neighbor_builder
+from tidem.kernels.contact import make_force_kernel
+from tidem.kernels.diagnostics import make_energy_kernel
+from tidem.kernels.integrate import make_integrators
+from tidem.kernels.outlet import make_recycle_kernel
+from tidem.model import Model
+from tidem.pour import Pourer
+from tidem.state import State, allocate
+
+
+class RunError(RuntimeError):
+    """The simulation became invalid; the message names the particle or setting and the fix."""
+
+
+class Solver:
+    """Advance a Model's State in time."""
+
+    def __init__(self, model: Model):
+        self.model = model
+        self.state: State = allocate(model)
+        f = model.features
+        S = self.state
+        self.n = model.capacity
+        self.dt = model.dt
+        self.t = 0.0
+        self.steps = 0
+        self.rebuilds = 0
+        self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin, f.rolling, f.hysteretic, S)
+        self._forces = make_force_kernel(model.grid, f.law, f.rolling, f.n_planes, f.n_tubes, model.wall_slots,
+                                         model.gravity, S, f.contact_time)
+        self._kick_drift, self._kick = make_integrators(model.grid, S)
+        self._energies = make_energy_kernel(model.gravity, S)
+        self._recycle = None
+        if f.recycle:
+            o = model.scene.outlet
+            self._recycle = make_recycle_kernel(o.height, o.reinsert_height, model.wall_slots, S)
+        self.pourer = Pourer(model, S) if model.pours else None
+        self._check_every = model.scene.numerics.check_interval
+        self.start()
+
+    def start(self) -> None:
+        """First neighbour build and force evaluation (so that step() can begin with a kick)."""
+        if self.pourer is not None:
+            self.pourer.insert(self.t)
+        self._rebuild(self.n)
+        self.rebuilds += 1
+        self._forces(self.n, self.t, self.dt)
+        self.check()
+
+    def step(self) -> None:
+        dt = self.dt
+        self._kick_drift(self.n, dt)
+        self.t += dt
+        self.steps += 1
+        need = self.state.max_disp[None] > 0.5 * self.model.skin
+        if self._recycle is not None:
+            need |= self._recycle(self.n) > 0
+        if self.pourer is not None:
+            need |= self.pourer.insert(self.t) > 0
+        if need:
+            self._rebuild(self.n)
+            self.rebuilds += 1
+        self._forces(self.n, self.t, dt)
+        self._kick(self.n, dt)
+        if self.steps % self._check_every == 0:
+            self.check()
+
+    def check(self) -> None:
+        """Raise RunError on capacity overflow, NaN or an overlap above numerics.max_overlap."""
+        S = self.state
+        over = S.overflow.to_numpy()
+        if over[0] > 0:
+            raise RunError(
+                f"neighbour list overflow: a particle has {over[0]} neighbours within reach, capacity is "
+                f"{self.model.max_neighbors}; set numerics.max_neighbors = {int(over[0] * 1.25) + 1}")
+        if over[1] > 0:
+            raise RunError(
+                f"wall contact overflow: a particle touches more than {self.model.wall_slots} walls/tubes at once; "
+                f"raise numerics.max_wall_contacts")
+        x = S.x.to_numpy()
+        active = S.active.to_numpy().astype(bool)
+        bad = active & ~np.isfinite(x).all(axis=1)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise RunError(f"particle {i} has a non-finite position at t = {self.t:.6g} s (step {self.steps}); "
+                           "the time step is too large for the contact stiffness: lower numerics.dt_fraction")
+        ovl = S.ovl.to_numpy()
+        limit = self.model.scene.numerics.max_overlap
+        if (ovl[active] > limit).any():
+            i = int(np.argmax(np.where(active, ovl, 0)))
+            raise RunError(
+                f"particle {i} overlaps a neighbour or wall by {100 * ovl[i]:.1f} % of its radius at t = {self.t:.6g} s "
+                f"(limit {100 * limit:.0f} %): the contacts are too soft or too fast for this step; raise "
+                "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
+
+    def energies(self) -> dict:
+        """Kinetic, rotational and potential energy [J], contacts per particle, active count."""
+        self._energies(self.n)
+        e_kin, e_rot, e_pot, contacts, active = self.state.sums.to_numpy()
+        return dict(kinetic_energy_J=e_kin, rotational_energy_J=e_rot, potential_energy_J=e_pot,
+                    coordination=contacts / max(active, 1.0), particles=int(active))
+
+    def release(self) -> None:
+        self.state.release()

@@ -1,0 +1,118 @@
+"""The State: Taichi fields of a run, allocated from the Model and sized from the scene.
+
+A history array exists only when a model needs it (rolling springs only with rolling
+friction, maximum overlap only for the hysteretic law). Fields live in one SNode tree that
+`release()` frees, so a process can run many scenes (the test suite does).
+
+Per-particle fields, shape [capacity]:
+  x, v, w          position [m], velocity [m/s], angular velocity [rad/s]
+  f, tq            force [N], torque [N m] of the last force evaluation
+  x_build          position at the last neighbour build [m]
+  radius, mass, inv_mass [1/kg], inv_inertia [1/(kg m^2)], mat (material index), active
+  ovl              largest overlap / smaller radius over the particle's contacts
+  ncontact         number of contacts
+Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
+spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
+Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import taichi as ti
+
+from tidem.kernels import contact_laws as cl
+from tidem.model import Model
+
+
+class State(SimpleNamespace):
+    """Namespace of Taichi fields (attribute names as in the module docstring)."""
+
+    def release(self) -> None:
+        if getattr(self, "_tree", None) is not None:
+            self._tree.destroy()
+            self._tree = None
+
+
+def allocate(model: Model) -> State:
+    """Allocate and fill every field the model's features need."""
+    fp = ti.f64 if model.features.precision == "float64" else ti.f32
+    N, K, W = model.capacity, model.max_neighbors, model.wall_slots
+    feat = model.features
+    fb = ti.FieldsBuilder()
+    S = State()
+
+    def place(shape, name, dtype=fp, n=None):
+        fld = ti.field(dtype) if n is None else ti.Vector.field(n, dtype)
+        fb.dense(ti.ij if len(shape) == 2 else ti.i, shape).place(fld)
+        setattr(S, name, fld)
+
+    for name in ("x", "v", "w", "f", "tq", "x_build"):
+        place((N,), name, n=3)
+    for name in ("radius", "mass", "inv_mass", "inv_inertia", "ovl"):
+        place((N,), name)
+    for name in ("mat", "active", "nbr_n", "pcell", "ncontact", "sorted_idx"):
+        place((N,), name, ti.i32)
+    if feat.contact_time:
+        place((N,), "touch_start")
+        place((N,), "touch_end")
+    for name in ("nbr", "nbr_new", "src"):
+        place((N, K), name, ti.i32)
+    place((N, K), "ft", n=3)
+    place((N, W), "wid", ti.i32)
+    place((N, W), "wft", n=3)
+    if feat.rolling:
+        place((N, K), "mr", n=3)
+        place((N, W), "wmr", n=3)
+    if feat.hysteretic:
+        place((N, K), "dmax")
+        place((N, W), "wdmax")
+    nc = model.grid.n_cells
+    for name in ("cell_count", "cell_start", "cell_fill"):
+        place((nc,), name, ti.i32)
+    P = model.pair_params.shape[0]
+    place((P, P), "pp", n=cl.N_PARAMS)
+    place((P, model.surface_params.shape[1]), "ps", n=cl.N_PARAMS)
+    NP = max(len(model.planes), 1)
+    NT = max(len(model.tubes), 1)
+    for name in ("plane_p0", "plane_n", "plane_vel"):
+        place((NP,), name, n=3)
+    place((NP,), "plane_t", n=2)
+    place((NT,), "tube_c", n=3)
+    place((NT,), "tube_mask", n=3)
+    place((NT,), "tube_r")
+    S.max_disp = ti.field(fp)
+    fb.place(S.max_disp)
+    place((2,), "overflow", ti.i32)
+    place((5,), "sums")
+    S._tree = fb.finalize()
+
+    radius = model.radius
+    inertia = 0.4 * model.mass * radius**2
+    S.x.from_numpy(model.x0)
+    S.x_build.from_numpy(model.x0)
+    S.v.from_numpy(model.v0)
+    S.radius.from_numpy(radius)
+    S.mass.from_numpy(model.mass)
+    S.inv_mass.from_numpy(1.0 / model.mass)
+    S.inv_inertia.from_numpy(1.0 / inertia)
+    S.mat.from_numpy(model.material)
+    S.active.from_numpy(model.active0.astype(np.int32))
+    S.wid.fill(-1)
+    if feat.contact_time:
+        S.touch_start.fill(-1.0)
+        S.touch_end.fill(-1.0)
+    S.pp.from_numpy(model.pair_params)
+    S.ps.from_numpy(model.surface_params)
+    if model.planes:
+        S.plane_p0.from_numpy(np.array([p["p0"] for p in model.planes], float))
+        S.plane_n.from_numpy(np.array([p["n"] for p in model.planes], float))
+        S.plane_vel.from_numpy(np.array([p["vel"] for p in model.planes], float))
+        S.plane_t.from_numpy(np.array([p["t"] for p in model.planes], float))
+    if model.tubes:
+        S.tube_c.from_numpy(np.array([t["c"] for t in model.tubes], float))
+        S.tube_mask.from_numpy(np.array([t["mask"] for t in model.tubes], float))
+        S.tube_r.from_numpy(np.array([t["r"] for t in model.tubes], float))
+    return S

@@ -1,0 +1,65 @@
+"""Critical time scales of a contact law and the time step chosen from them.
+
+* Rayleigh time (shear-wave transit of the smallest particle):
+  T_R = pi r sqrt(rho/G) / (0.1631 nu + 0.8766), G = E / (2 (1 + nu)).
+* Contact time of the stiffest pair: linear laws t_c = pi sqrt(m*/k) (k the unloading stiffness
+  k_l/e^2 for the hysteretic law); Hertz t_c = 2.87 (m*^2 / (R* E*^2 v))^(1/5) at the largest
+  expected impact speed v (Johnson 1985).
+* Stability limit of the explicit (Verlet) step: dt < 2 sqrt(m*/k_max), k_max the largest
+  contact stiffness (for Hertz, S_n at the peak overlap of an impact at v), and for Hertz also
+  dt < T_R.
+The default step is `dt_fraction * min(T_R, t_c)`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class TimeScales:
+    """Time scales of the stiffest and lightest contact in a scene [s]."""
+
+    rayleigh: float
+    contact: float
+    limit: float
+
+    @property
+    def reference(self) -> float:
+        return min(self.rayleigh, self.contact)
+
+
+def rayleigh_time(radius: float, density: float, youngs: float, poisson: float) -> float:
+    shear = youngs / (2.0 * (1.0 + poisson))
+    return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
+
+
+def hertz_contact_time(m_eff: float, r_eff: float, e_star: float, speed: float) -> float:
+    return 2.87 * (m_eff**2 / (r_eff * e_star**2 * speed)) ** 0.2
+
+
+def hertz_peak_overlap(m_eff: float, r_eff: float, e_star: float, speed: float) -> float:
+    return (15.0 * m_eff * speed**2 / (16.0 * e_star * math.sqrt(r_eff))) ** 0.4
+
+
+def time_scales(law: str, d_min: float, density: float, youngs: float, poisson: float,
+                restitution: float, speed: float) -> TimeScales:
+    """Time scales for the lightest particle of a material, against a like particle or a wall."""
+    r = 0.5 * d_min
+    m = density * math.pi / 6.0 * d_min**3
+    t_r = rayleigh_time(r, density, youngs, poisson)
+    m_eff = 0.5 * m
+    if law == "hertz_mindlin":
+        e_star = youngs / (2.0 * (1.0 - poisson**2))
+        r_eff = 0.5 * r
+        t_c = hertz_contact_time(m_eff, r_eff, e_star, speed)
+        s_n = 2.0 * e_star * math.sqrt(r_eff * hertz_peak_overlap(m_eff, r_eff, e_star, speed))
+        limit = min(2.0 * math.sqrt(m_eff / s_n), t_r)
+    else:
+        k = 0.5 * youngs * d_min
+        if law == "hysteretic":
+            k /= restitution**2
+        t_c = math.pi * math.sqrt(m_eff / k)
+        limit = 2.0 * math.sqrt(m_eff / k)
+    return TimeScales(rayleigh=t_r, contact=t_c, limit=limit)
