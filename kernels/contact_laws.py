@@ -20,8 +20,9 @@ Normal laws (F_n > 0 is repulsive):
   S_t = 8 G* sqrt(R* delta), eta = 2 sqrt(5/6) gamma sqrt(S m_eff) (Tsuji et al. 1992 form,
   as in LIGGGHTS' hertz model).
 * linear hysteresis of Walton & Braun (source 3 eq. 26-28): loading with k_l, unloading and
-  reloading with k_ul = k_l / e^2 along F = k_ul (delta - delta_0), delta_0 = delta_max
-  (1 - k_l/k_ul); no attraction, floor 0.001 k_l delta; restitution sqrt(k_l/k_ul) = e.
+  reloading with k_ul along F = k_ul (delta - delta_0), delta_0 = delta_max (1 - k_l/k_ul);
+  no attraction, floor 0.001 k_l delta. Without the floor e = sqrt(k_l/k_ul); `tidem.model`
+  picks k_ul so that the restitution *with* the floor is e.
 
 Tangential (source 3 eq. 29; Cundall-Strack spring with history): the spring `xi` is rotated
 into the current tangent plane keeping its length, grows by v_t dt, F_t = -k_t xi - eta_t v_t;

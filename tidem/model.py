@@ -99,6 +99,31 @@ class Model:
         return per * self.capacity + cells
 
 
+FLOOR = 0.001  # repulsive floor of the hysteretic law, F >= FLOOR k_l delta (source 3)
+
+
+def hysteretic_stiffness_ratio(e: float) -> float:
+    """k_l / k_ul that gives restitution e for the Walton-Braun law *with* its force floor.
+
+    Without the floor e^2 = k_l/k_ul (source 3 eq. 28). The floor FLOOR k_l delta returns
+    extra energy; integrating loading (k_l delta up to delta_m) and unloading
+    (max(k_ul (delta - delta_0), FLOOR k_l delta)) gives, with a = k_l/k_ul,
+        e^2 = a + FLOOR (1 - a)^2 / (1 - FLOOR a),
+    solved here by bisection so that the measured restitution is exactly e.
+    """
+    if e >= 1.0:
+        return 1.0
+    target = e * e
+    lo, hi = 0.0, 1.0
+    for _ in range(100):
+        a = 0.5 * (lo + hi)
+        if a + FLOOR * (1 - a) ** 2 / (1 - FLOOR * a) < target:
+            lo = a
+        else:
+            hi = a
+    return max(0.5 * (lo + hi), 1e-12)
+
+
 def _pair_vector(a, b, wall_friction=None) -> np.ndarray:
     """Parameters of a contact between materials a and b (indices in `contact_laws`).
 
@@ -125,7 +150,7 @@ def _pair_vector(a, b, wall_friction=None) -> np.ndarray:
     p[cl.MU_D] = mu_d
     p[cl.MU_R] = 0.5 * (a.rolling_friction + b.rolling_friction)
     p[cl.ETA_R] = 0.5 * (a.rolling_damping + b.rolling_damping)
-    p[cl.UNLOAD_RATIO] = 1.0 / e**2
+    p[cl.UNLOAD_RATIO] = 1.0 / hysteretic_stiffness_ratio(e)
     p[cl.E_I] = a.youngs_modulus
     p[cl.E_J] = b.youngs_modulus
     return p
@@ -181,6 +206,12 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     src = str(loaded.source)
     dom = scene.domain
     mats = scene.materials
+    if scene.contact.model == "hysteretic":
+        low = [n for n, m in mats.items() if m.restitution ** 2 <= FLOOR * 1.01]
+        if low:
+            raise SceneError(src, [f"materials.{n}.restitution: {mats[n].restitution} is below what the hysteretic law "
+                                   f"can give with its force floor ({math.sqrt(FLOOR * 1.01):.3f}); raise it or use "
+                                   "contact.model = 'linear'" for n in low])
     mat_names = list(mats)
     default_mat = scene.particles[0].material
     planes, tubes = _surfaces(scene, mats, default_mat)

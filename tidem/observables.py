@@ -2,7 +2,7 @@
 
 contact_time: for every particle, the duration of its first contact (first touch to first
 release, measured by the force kernel), next to the Hertz prediction for a head-on impact
-with its nearest particle at t = 0, t_c = 2.87 (m*^2 / (R* E*^2 v))^(1/5) (Johnson 1985),
+with its nearest particle at t = 0, t_c = 2.868 (m*^2 / (R* E*^2 v))^(1/5) (Johnson 1985),
 v the initial relative speed along the line of centres.
 """
 

@@ -3,7 +3,7 @@
 * Rayleigh time (shear-wave transit of the smallest particle):
   T_R = pi r sqrt(rho/G) / (0.1631 nu + 0.8766), G = E / (2 (1 + nu)).
 * Contact time of the stiffest pair: linear laws t_c = pi sqrt(m*/k) (k the unloading stiffness
-  k_l/e^2 for the hysteretic law); Hertz t_c = 2.87 (m*^2 / (R* E*^2 v))^(1/5) at the largest
+  k_l/e^2 for the hysteretic law); Hertz t_c = 2.868 (m*^2 / (R* E*^2 v))^(1/5) at the largest
   expected impact speed v (Johnson 1985).
 * Stability limit of the explicit (Verlet) step: dt < 2 sqrt(m*/k_max), k_max the largest
   contact stiffness (for Hertz, S_n at the peak overlap of an impact at v), and for Hertz also
@@ -36,7 +36,7 @@ def rayleigh_time(radius: float, density: float, youngs: float, poisson: float) 
 
 
 def hertz_contact_time(m_eff: float, r_eff: float, e_star: float, speed: float) -> float:
-    return 2.87 * (m_eff**2 / (r_eff * e_star**2 * speed)) ** 0.2
+    return 2.868 * (m_eff**2 / (r_eff * e_star**2 * speed)) ** 0.2
 
 
 def hertz_peak_overlap(m_eff: float, r_eff: float, e_star: float, speed: float) -> float:
@@ -59,7 +59,7 @@ def time_scales(law: str, d_min: float, density: float, youngs: float, poisson: 
     else:
         k = 0.5 * youngs * d_min
         if law == "hysteretic":
-            k /= restitution**2
+            k /= max(restitution**2 - 0.001, 1e-6)
         t_c = math.pi * math.sqrt(m_eff / k)
         limit = 2.0 * math.sqrt(m_eff / k)
     return TimeScales(rayleigh=t_r, contact=t_c, limit=limit)

@@ -1,0 +1,48 @@
+"""One Taichi initialisation (CPU, float64) for the whole test session, and scene helpers."""
+
+import copy
+
+import pytest
+
+from tidem.runtime import ensure_taichi
+
+ensure_taichi("cpu", "float64")
+
+
+def make_scene(**tables) -> dict:
+    """A minimal valid raw scene (one steel material, no gravity, open box) with overrides."""
+    raw = {
+        "name": "test",
+        "domain": {"min": [-0.1, -0.1, -0.1], "max": [0.1, 0.1, 0.1], "walls": "none", "gravity": [0.0, 0.0, 0.0]},
+        "materials": {"steel": {"density": 7800.0, "youngs_modulus": 2e11, "poisson_ratio": 0.3,
+                                "restitution": 1.0, "friction": 0.0}},
+        "particles": [{"name": "p", "material": "steel", "diameter": {"distribution": "mono", "value": 0.01},
+                       "positions": [[0.0, 0.0, 0.0]]}],
+    }
+    for key, value in tables.items():
+        if isinstance(value, dict) and isinstance(raw.get(key), dict):
+            merged = copy.deepcopy(raw[key])
+            merged.update(value)
+            raw[key] = merged
+        else:
+            raw[key] = value
+    return raw
+
+
+@pytest.fixture
+def solver_for():
+    """Build a Solver from a raw scene dict; released after the test."""
+    from tidem.model import build_model
+    from tidem.scene.load import validate
+    from tidem.solver import Solver
+
+    made = []
+
+    def build(raw, **kw):
+        solver = Solver(build_model(validate(raw), **kw))
+        made.append(solver)
+        return solver
+
+    yield build
+    for s in made:
+        s.release()

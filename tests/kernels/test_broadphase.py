@@ -1,0 +1,122 @@
+"""Broad phase against brute force (periodic and walled, polydisperse), and contact history
+carried across neighbour rebuilds."""
+
+import numpy as np
+import pytest
+
+from tests.conftest import make_scene
+
+
+def brute_force_pairs(x, r, skin, lengths, periodic):
+    d = x[None, :, :] - x[:, None, :]
+    for a in range(3):
+        if periodic[a]:
+            d[..., a] -= lengths[a] * np.round(d[..., a] / lengths[a])
+    dist = np.linalg.norm(d, axis=2)
+    reach = r[:, None] + r[None, :] + skin
+    close = dist < reach
+    np.fill_diagonal(close, False)
+    return {(i, j) for i, j in zip(*np.nonzero(close))}
+
+
+def random_spheres(rng, n, lo, hi, d_max):
+    """n non-overlapping centres (for spheres up to d_max) by rejection, no periodic wrap."""
+    pts = np.empty((n, 3))
+    k = 0
+    while k < n:
+        p = rng.uniform(lo, hi)
+        if k == 0 or np.linalg.norm(pts[:k] - p, axis=1).min() > d_max:
+            pts[k] = p
+            k += 1
+    return pts
+
+
+def listed_pairs(S, n):
+    nbr = S.nbr.to_numpy()
+    cnt = S.nbr_n.to_numpy()
+    return {(i, int(nbr[i, k])) for i in range(n) for k in range(cnt[i])}
+
+
+@pytest.mark.parametrize("periodic", [["x", "y"], []])
+def test_neighbour_list_matches_brute_force(solver_for, periodic):
+    rng = np.random.default_rng(11)
+    n = 400
+    lo, hi = np.array([0.0, 0.0, 0.0]), np.array([0.02, 0.018, 0.015])
+    x = random_spheres(rng, n, lo + 0.001, hi - 0.001, 0.002)
+    raw = make_scene(
+        domain={"min": lo.tolist(), "max": hi.tolist(), "periodic": periodic, "walls": "none", "gravity": [0, 0, 0]},
+        particles=[{"name": "p", "material": "steel", "positions": x.tolist(), "seed": 4,
+                    "diameter": {"distribution": "uniform", "min": 0.001, "max": 0.002}}],
+        numerics={"skin": 0.3, "max_neighbors": 64},
+    )
+    s = solver_for(raw)
+    S = s.state
+    r = S.radius.to_numpy()
+    lengths = hi - lo
+    per = [a in periodic for a in "xyz"]
+    expected = brute_force_pairs(S.x.to_numpy(), r, s.model.skin, lengths, per)
+    assert len(expected) > n, "the test must have many pairs"
+    assert listed_pairs(S, n) == expected
+    # rows are sorted by partner index
+    nbr, cnt = S.nbr.to_numpy(), S.nbr_n.to_numpy()
+    assert all(np.all(np.diff(nbr[i, : cnt[i]]) > 0) for i in range(n))
+
+
+def test_history_follows_partner_across_rebuild(solver_for):
+    """Tag every history slot with its pair; after particles move and the list is rebuilt,
+    each surviving pair finds its own tag and each new pair starts from zero."""
+    rng = np.random.default_rng(5)
+    g = (np.arange(8) + 0.5) * 0.0024
+    x = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    x += rng.uniform(-0.0002, 0.0002, x.shape)
+    n = len(x)
+    raw = make_scene(
+        domain={"min": [0, 0, 0], "max": [0.0192, 0.0192, 0.0192], "periodic": ["x", "y", "z"], "walls": "none",
+                "gravity": [0, 0, 0]},
+        materials={"steel": {"density": 7800.0, "youngs_modulus": 2e11, "restitution": 0.5, "friction": 0.5,
+                             "rolling_friction": 0.1}},
+        contact={"model": "hysteretic"},
+        particles=[{"name": "p", "material": "steel", "positions": x.tolist(),
+                    "diameter": {"distribution": "mono", "value": 0.002}}],
+        numerics={"skin": 0.5, "max_neighbors": 48},
+    )
+    s = solver_for(raw)
+    S = s.state
+    before = listed_pairs(S, n)
+    K = s.model.max_neighbors
+    nbr, cnt = S.nbr.to_numpy(), S.nbr_n.to_numpy()
+    tag = np.zeros((n, K, 3))
+    for i in range(n):
+        for k in range(cnt[i]):
+            tag[i, k] = [i, nbr[i, k], 1.0]
+    S.ft.from_numpy(tag)
+    S.mr.from_numpy(2 * tag)
+    S.dmax.from_numpy(tag[:, :, 1].copy())
+    S.x.from_numpy(S.x.to_numpy() + rng.normal(0, 0.0006, (n, 3)))
+    s._rebuild(n)
+    after = listed_pairs(S, n)
+    assert len(before & after) > 100 and len(after - before) > 100 and len(before - after) > 100
+    ft, mr, dmax = S.ft.to_numpy(), S.mr.to_numpy(), S.dmax.to_numpy()
+    nbr, cnt = S.nbr.to_numpy(), S.nbr_n.to_numpy()
+    for i in range(n):
+        for k in range(cnt[i]):
+            j = nbr[i, k]
+            want = np.array([i, j, 1.0]) if (i, j) in before else np.zeros(3)
+            assert np.array_equal(ft[i, k], want)
+            assert np.array_equal(mr[i, k], 2 * want)
+            assert dmax[i, k] == want[1]
+
+
+def test_capacity_overflow_is_an_error(solver_for):
+    from tidem.solver import RunError
+
+    rng = np.random.default_rng(2)
+    x = rng.uniform(0.0, 0.01, (300, 3))
+    raw = make_scene(
+        domain={"min": [0, 0, 0], "max": [0.01, 0.01, 0.01], "walls": "none", "gravity": [0, 0, 0]},
+        particles=[{"name": "p", "material": "steel", "positions": x.tolist(),
+                    "diameter": {"distribution": "mono", "value": 0.002}}],
+        numerics={"max_neighbors": 4, "max_overlap": 0.5},
+    )
+    with pytest.raises(RunError, match="numerics.max_neighbors"):
+        solver_for(raw)
