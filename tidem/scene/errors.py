@@ -121,7 +121,8 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
             if owner is not None:
                 close = difflib.get_close_matches(name, list(owner.model_fields), n=1, cutoff=0.6)
                 hint = f"; did you mean '{close[0]}'?" if close else f"; valid keys: {', '.join(owner.model_fields)}"
-            msg = f"{path}: unknown key '{name}'{hint}"
+            where = key_path(loc[:-1]) or "top level"
+            msg = f"{where}: unknown key '{name}'{hint}"
         elif kind == "missing":
             msg = f"{path}: required key is missing"
         elif kind in ("float_type", "int_type", "finite_number") and isinstance(value, str):

@@ -1,0 +1,136 @@
+"""Bad scene input: exit code 2, one message naming file, key path and fix; never a traceback."""
+
+import tomllib
+
+import pytest
+from typer.testing import CliRunner
+
+from tidem.cli import app
+from tidem.scene.load import resolve
+
+runner = CliRunner()
+
+
+def impact_scene(tmp_path, edit):
+    """The shipped impact scene with `edit(raw)` applied, written as TOML to tmp_path."""
+    raw = tomllib.loads(resolve("sphere_impact").read_text())
+    edit(raw)
+    path = tmp_path / "bad.toml"
+    path.write_text(to_toml(raw))
+    return path
+
+
+def to_toml(d, prefix=""):
+    """A tiny TOML writer, enough for the test scenes (tables, arrays of tables, scalars)."""
+    def value(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return '"' + v + '"'
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
+        return repr(v)
+
+    lines, tables = [], []
+    for k, v in d.items():
+        if isinstance(v, dict):
+            tables.append((k, v))
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            tables.append((k, v))
+        else:
+            lines.append(f"{k} = {value(v)}")
+    out = "\n".join(lines) + "\n"
+    for k, v in tables:
+        name = f"{prefix}.{k}" if prefix else k
+        if isinstance(v, list):
+            for item in v:
+                out += f"\n[[{name}]]\n" + "\n".join(f"{a} = {value(b)}" for a, b in item.items()) + "\n"
+        elif all(isinstance(x, dict) for x in v.values()) and v:
+            out += to_toml(v, name)
+        else:
+            out += f"\n[{name}]\n" + "\n".join(f"{a} = {value(b)}" for a, b in v.items()) + "\n"
+    return out
+
+
+def run_check(path, *extra):
+    result = runner.invoke(app, ["check", str(path), *extra])
+    assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
+    return result
+
+
+@pytest.mark.parametrize(
+    "edit, expected",
+    [
+        (lambda r: r["particles"][0]["diameter"].update(value=-0.0191),
+         "particles[0].diameter.value: must be > 0 (got -0.0191)"),
+        (lambda r: r["materials"]["sus304"].update(youngs_modulus="184 GPa"),
+         "materials.sus304.youngs_modulus: expected a number, got the text '184 GPa'; units are SI: write 1.84e+11"),
+        (lambda r: r["particles"][0]["diameter"].update(value="19.1 mm"),
+         "write 0.0191"),
+        (lambda r: r["materials"]["sus304"].update(densty=7800.0),
+         "materials.sus304: unknown key 'densty'; did you mean 'density'?"),
+        (lambda r: r.update(tubes=[{"center": [0.0, 0.0, 0.0], "diameter": 0.02},
+                                   {"center": [0.0, 0.0, 0.0], "diameter": -0.027}]),
+         "tubes[1].diameter: must be > 0 (got -0.027)"),
+        (lambda r: r.update(tubes=[{"center": [0.2, 0.0, 0.0], "diameter": 0.027}]),
+         "tubes[0] lies outside the domain"),
+        (lambda r: r["particles"][0].update(material="steel"),
+         "particles[0].material: no material named 'steel'; defined: sus304"),
+        (lambda r: r["contact"].update(model="hooke"),
+         "contact.model: input should be 'hertz_mindlin', 'linear' or 'hysteretic' (got 'hooke')"),
+        (lambda r: r["numerics"].update(dt=1e-4),
+         "numerics.dt: 0.0001 s is above the stability limit"),
+        (lambda r: r["particles"][0]["positions"].__setitem__(0, [0.5, 0.0, 0.0]),
+         "particles[0].positions[0]: [0.5, 0.0, 0.0] lies outside the domain"),
+        (lambda r: r["domain"].update(max=[0.05, 0.2, -0.06]),
+         "domain: max[2] must be greater than min[2]"),
+    ],
+)
+def test_bad_input_is_one_clear_message(tmp_path, edit, expected):
+    path = impact_scene(tmp_path, edit)
+    result = run_check(path)
+    assert result.exit_code == 2, result.output
+    assert expected in result.output
+    assert str(path) in result.output
+    assert "Traceback" not in result.output
+
+
+def test_all_errors_reported_together(tmp_path):
+    def edit(r):
+        r["materials"]["sus304"]["density"] = -1.0
+        r["particles"][0]["diameter"]["value"] = 0.0
+        r["numerics"]["t_end"] = "1 s"
+
+    result = run_check(impact_scene(tmp_path, edit))
+    assert result.exit_code == 2
+    assert "3 errors" in result.output
+    for key in ("materials.sus304.density", "particles[0].diameter.value", "numerics.t_end"):
+        assert key in result.output
+
+
+def test_forced_dt_is_accepted(tmp_path):
+    path = impact_scene(tmp_path, lambda r: r["numerics"].update(dt=1e-4, force_dt=True))
+    assert run_check(path).exit_code == 0
+
+
+def test_set_override_is_validated():
+    result = runner.invoke(app, ["check", "sphere_impact", "--set", "materials.sus304.restitution=1.5"])
+    assert result.exit_code == 2
+    assert "materials.sus304.restitution: must be <= 1" in result.output
+    result = runner.invoke(app, ["check", "sphere_impact", "--set", "numerics.dt_fraction=0.05"])
+    assert result.exit_code == 0, result.output
+
+
+def test_unknown_scene_name_lists_shipped():
+    result = runner.invoke(app, ["check", "no_such_scene"])
+    assert result.exit_code == 2
+    assert "sphere_impact.toml" in result.output
+
+
+def test_invalid_toml(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text("[domain\nmin = 1")
+    result = run_check(path)
+    assert result.exit_code == 2 and "not valid TOML" in result.output

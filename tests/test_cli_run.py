@@ -1,0 +1,102 @@
+"""End-to-end runs through the CLI: output layout, ParaView-readable snapshots, progress of a
+failed or interrupted run, shipped-scene lookup."""
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tidem.cli import app
+from tidem.io.vtp import read_vtp
+
+runner = CliRunner()
+
+
+def test_impact_scene_output_and_hertz(tmp_path):
+    out = tmp_path / "impact"
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    run = json.loads((out / "run.json").read_text())
+    for key in ("scene_echo", "tidem_version", "active_models", "particles", "steps", "dt_s", "wall_s",
+                "particle_steps_per_s"):
+        assert key in run
+    assert run["status"] == "finished" and run["particles"] == 6
+    rows = run["observables"]["contact_time"]
+    for row in rows:
+        # Hertz contact time within 2 % (the small damping of e = 0.95 lengthens it slightly)
+        assert row["contact_time_s"] == pytest.approx(row["hertz_contact_time_s"], rel=0.02)
+    header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
+    assert header[:3] == ["time_s", "step", "kinetic_energy_J"]
+    pvd = (out / "snapshots.pvd").read_text()
+    files = sorted((out / "snapshots").glob("*.vtp"))
+    assert len(files) == pvd.count("<DataSet") >= 20
+    points, data = read_vtp(files[-1])
+    assert points.shape == (6, 3)
+    assert set(data) >= {"radius", "velocity", "omega", "id"}
+    assert np.allclose(data["radius"], 0.00955)
+
+
+def test_snapshots_open_in_vtk(tmp_path):
+    import pyvista as pv
+
+    from tidem.io.vtp import write_vtp
+
+    x = np.random.default_rng(0).random((50, 3))
+    write_vtp(tmp_path / "a.vtp", x, {"radius": np.full(50, 0.1), "velocity": x * 2, "id": np.arange(50, dtype=np.int32)},
+              time=0.5)
+    mesh = pv.read(tmp_path / "a.vtp")
+    assert mesh.n_points == 50 and mesh.n_cells == 50
+    assert np.allclose(mesh.points, x)
+    assert np.allclose(mesh.point_data["velocity"], 2 * x)
+    assert list(mesh.point_data["id"]) == list(range(50))
+
+
+def test_runaway_overlap_stops_with_particle_named(tmp_path):
+    """Soft spheres hit hard: the run stops with a message naming the particle, exit 3, and
+    the snapshots written before remain readable."""
+    out = tmp_path / "soft"
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet",
+                                 "--set", "materials.sus304.youngs_modulus=1e5",
+                                 "--set", "numerics.check_interval=5"])
+    assert result.exit_code == 3, result.output
+    assert "particle" in result.output and "% of its radius" in result.output
+    run = json.loads((out / "run.json").read_text())
+    assert run["status"] == "failed"
+    for f in (out / "snapshots").glob("*.vtp"):
+        read_vtp(f)
+
+
+def test_ctrl_c_keeps_finished_output(tmp_path, monkeypatch):
+    from tidem.solver import Solver
+
+    real_step = Solver.step
+
+    def step(self):
+        if self.steps == 300:
+            raise KeyboardInterrupt
+        real_step(self)
+
+    monkeypatch.setattr(Solver, "step", step)
+    out = tmp_path / "stop"
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet"])
+    assert result.exit_code == 130
+    run = json.loads((out / "run.json").read_text())
+    assert run["status"] == "interrupted" and run["steps"] == 300
+    listed = (out / "snapshots.pvd").read_text().count("<DataSet")
+    assert listed == len(list((out / "snapshots").glob("*.vtp"))) > 0
+    assert not list(out.rglob("*.tmp"))
+
+
+def test_scenes_lists_shipped_with_runtime():
+    result = runner.invoke(app, ["scenes"])
+    assert result.exit_code == 0
+    assert "sphere_impact.toml" in result.output and "moving_bed_tubes.toml" in result.output
+    assert "run time:" in result.output
+
+
+def test_check_prints_derived_numbers():
+    result = runner.invoke(app, ["check", "moving_bed_tubes"])
+    assert result.exit_code == 0, result.output
+    for word in ("Rayleigh time", "time step", "kernels:", "rolling resistance (model C)", "B/particle"):
+        assert word in result.output
