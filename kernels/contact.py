@@ -5,7 +5,8 @@ One kernel, one thread per particle, writing only that particle's force, torque 
 contact law (`contact_laws.make_contact_response`); a partner out of range has its history
 cleared. Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is
 a plane with a velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Wall and tube contacts
-keep their history in a few slots per particle keyed by the surface index; a particle that
+keep their history in a few slots per particle keyed by the surface index (`wmask` has bit s
+set while surface s holds a slot, so particles away from every wall skip the search); a particle that
 touches more surfaces than it has slots is counted in `overflow[1]` (an error for the run).
 
 Gravity is added here: f_i = m_i g + sum of contact forces. `ovl[i]` receives the largest
@@ -115,18 +116,21 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             S.mr[i, k] = zero3
                         if ti.static(hysteretic):
                             S.dmax[i, k] = 0.0
+                held = S.wmask[i]  # bit s set: surface s has a history slot
                 for s in ti.static(range(n_surf)):
                     delta, nrm, u = surface_contact(i, s, t)
                     slot = -1
-                    for q in range(W):
-                        if S.wid[i, q] == s:
-                            slot = q
+                    if (held >> s) & 1:
+                        for q in range(W):
+                            if S.wid[i, q] == s:
+                                slot = q
                     if delta > 0.0:
                         if slot < 0:
                             for q in range(W):
                                 if slot < 0 and S.wid[i, q] < 0:
                                     slot = q
                                     S.wid[i, q] = s
+                                    held |= 1 << s
                                     S.wft[i, q] = zero3
                                     if ti.static(rolling):
                                         S.wmr[i, q] = zero3
@@ -156,6 +160,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             touching += 1
                     elif slot >= 0:
                         S.wid[i, slot] = -1
+                        held &= ~(1 << s)
+                S.wmask[i] = held
                 S.f[i] = force
                 S.tq[i] = torque
                 S.ovl[i] = worst

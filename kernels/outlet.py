@@ -18,6 +18,7 @@ def make_recycle_kernel(height: float, reinsert_height: float, W: int, S):
                 S.w[i] = ti.Vector([0.0, 0.0, 0.0])
                 for q in range(W):
                     S.wid[i, q] = -1
+                S.wmask[i] = 0
                 moved += 1
         return moved
 

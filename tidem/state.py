@@ -13,7 +13,8 @@ Per-particle fields, shape [capacity]:
   ncontact         number of contacts
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
-Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax.
+Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax;
+wmask [capacity]: bit s set while surface s holds one of the particle's slots.
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ def allocate(model: Model) -> State:
         place((N,), name, n=3)
     for name in ("radius", "mass", "inv_mass", "inv_inertia", "ovl"):
         place((N,), name)
-    for name in ("mat", "active", "nbr_n", "pcell", "ncontact", "sorted_idx"):
+    for name in ("mat", "active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask"):
         place((N,), name, ti.i32)
     if feat.contact_time:
         place((N,), "touch_start")

@@ -90,6 +90,10 @@ def cross_checks(scene: Scene) -> list[str]:
         if o.type == "moving_plate" and "z" in dom.periodic:
             errs.append("outlet: a moving plate needs a non-periodic z axis; remove 'z' from domain.periodic")
 
+    n_surfaces = len(dom.wall_sides()) + len(scene.walls) + len(scene.tubes) + (scene.outlet is not None)
+    if n_surfaces > 31:
+        errs.append(f"walls and tubes: {n_surfaces} surfaces in all, at most 31 are supported; merge or drop some")
+
     dmax = max_diameter(scene)
     cell = dmax * (1.0 + scene.numerics.skin)
     for ax in dom.periodic:
