@@ -1,6 +1,6 @@
 """Recycling outlet: a particle whose centre falls below the outlet height re-enters at the
-reinsertion height with the same horizontal position and velocity (mass is conserved; the
-column behaves as an endless bed). Its wall history is cleared; its pair history is dropped
+reinsertion height with the same horizontal position and velocity and no spin (mass is
+conserved; the column behaves as an endless bed). Its wall history is cleared; its pair history is dropped
 by the neighbour rebuild that the solver triggers whenever a particle was moved."""
 
 import taichi as ti

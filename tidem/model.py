@@ -331,8 +331,8 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     skin = num.skin * d_max
     reach = d_max + skin
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
-    while np.prod(cells) > max(64 * len(radius), 1 << 20):
-        cells = [max(1, c // 2) for c in cells]
+    while np.prod(cells) > max(64 * len(radius), 1 << 20):  # sparse, huge domains: coarser cells
+        cells = [max(3 if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
     grid = Grid(lo=tuple(dom.min), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
     ratio = d_max / d_min
     k = num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + num.skin) ** 3))

@@ -2,7 +2,7 @@
 
 Sizes are drawn from the group's distribution with its seed (cut-offs by redrawing, not by
 clipping, so no spike at the bounds). A filled region is a simple cubic lattice of spacing
-1.02 d_max (no initial overlap), its sites jittered by 1 % of d_max, filled bottom-up; sites
+1.02 d_max (no initial overlap), its sites jittered by up to 1 % of the spacing, filled bottom-up; sites
 that would overlap a tube or a wall are skipped.
 """
 

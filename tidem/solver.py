@@ -84,7 +84,7 @@ class Solver:
         if over[0] > 0:
             raise RunError(
                 f"neighbour list overflow: a particle has {over[0]} neighbours within reach, capacity is "
-                f"{self.model.max_neighbors}; set numerics.max_neighbors = {int(over[0] * 1.25) + 1}")
+                f"{self.model.max_neighbors}; set numerics.max_neighbors = {min(int(over[0] * 1.25) + 1, 512)}")
         if over[1] > 0:
             raise RunError(
                 f"wall contact overflow: a particle touches more than {self.model.wall_slots} walls/tubes at once; "

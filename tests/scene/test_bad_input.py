@@ -86,6 +86,12 @@ def run_check(path, *extra):
          "particles[0].positions[0]: [0.5, 0.0, 0.0] lies outside the domain"),
         (lambda r: r["domain"].update(max=[0.05, 0.2, -0.06]),
          "domain: max[2] must be greater than min[2]"),
+        (lambda r: r.update(particles=[]),
+         "particles: list should have at least 1 item"),
+        (lambda r: r.update(outlet={"type": "moving_plate", "speed": 0.01}),
+         "outlet.stop_height: -0.05 is not below the plate's start height -0.05"),
+        (lambda r: r["particles"][0].update(diameter={"distribution": "gauss", "value": 0.01}),
+         "distribution must be one of mono, uniform, normal, lognormal (got 'gauss')"),
     ],
 )
 def test_bad_input_is_one_clear_message(tmp_path, edit, expected):
@@ -108,6 +114,11 @@ def test_all_errors_reported_together(tmp_path):
     assert "3 errors" in result.output
     for key in ("materials.sus304.density", "particles[0].diameter.value", "numerics.t_end"):
         assert key in result.output
+
+
+def test_distribution_defaults_to_mono(tmp_path):
+    path = impact_scene(tmp_path, lambda r: r["particles"][0]["diameter"].pop("distribution"))
+    assert run_check(path).exit_code == 0
 
 
 def test_forced_dt_is_accepted(tmp_path):

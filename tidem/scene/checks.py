@@ -89,8 +89,17 @@ def cross_checks(scene: Scene) -> list[str]:
             errs.append(f"outlet.reinsert_height: {o.reinsert_height} lies outside the domain's z range")
         if o.type == "moving_plate" and "z" in dom.periodic:
             errs.append("outlet: a moving plate needs a non-periodic z axis; remove 'z' from domain.periodic")
+        if o.type == "moving_plate":
+            stop = dom.min[2] if o.stop_height is None else o.stop_height
+            if stop >= h:
+                errs.append(f"outlet.stop_height: {stop} is not below the plate's start height {h}, so the plate "
+                            "would never move; lower the domain's min z or set stop_height below height")
+            elif stop < dom.min[2]:
+                errs.append(f"outlet.stop_height: {stop} is below the domain (min z {dom.min[2]}); extend the domain")
 
-    n_surfaces = len(dom.wall_sides()) + len(scene.walls) + len(scene.tubes) + (scene.outlet is not None)
+    plate = scene.outlet is not None and scene.outlet.type == "moving_plate"
+    sides = [s for s in dom.wall_sides() if not (plate and s == "z-")]
+    n_surfaces = len(sides) + len(scene.walls) + len(scene.tubes) + plate
     if n_surfaces > 31:
         errs.append(f"walls and tubes: {n_surfaces} surfaces in all, at most 31 are supported; merge or drop some")
 

@@ -133,7 +133,7 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
             msg = f"{path}: must be {op} {bound} (got {value})"
         elif kind == "literal_error":
             msg = f"{path}: {e['msg'].lower()} (got {value!r})"
-        elif kind == "union_tag_invalid":
+        elif kind in ("union_tag_invalid", "union_tag_not_found"):
             msg = f"{path}: distribution must be one of mono, uniform, normal, lognormal (got {value.get('distribution') if isinstance(value, dict) else value!r})"
         elif kind == "value_error":
             msg = f"{path}: {str(e.get('ctx', {}).get('error', e['msg']))}"

@@ -109,6 +109,14 @@ class ParticleGroup(Strict):
     velocities: list[Vec3] | None = None
     seed: int = 0
 
+    @model_validator(mode="before")
+    @classmethod
+    def _mono_by_default(cls, data):
+        d = data.get("diameter") if isinstance(data, dict) else None
+        if isinstance(d, dict) and "distribution" not in d:
+            data = {**data, "diameter": {"distribution": "mono", **d}}
+        return data
+
     @model_validator(mode="after")
     def _placement(self):
         ways = sum(x is not None for x in (self.region, self.positions, self.pour))
@@ -211,7 +219,7 @@ class Scene(Strict):
     domain: Domain
     contact: Contact = Contact()
     materials: dict[str, Material]
-    particles: list[ParticleGroup]
+    particles: list[ParticleGroup] = Field(min_length=1)
     walls: list[Wall] = []
     tubes: list[Tube] = []
     outlet: Outlet | None = None

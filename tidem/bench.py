@@ -1,0 +1,102 @@
+"""`tidem bench`: particle-steps per second on the dense settled bed of the peer benchmark.
+
+The bed is the 10 000-sphere column of `benchmarks/settle_bed.toml`, settled by tidem and
+stored in `benchmarks/bed10k.npz`, tiled laterally like `shared/bench/peers/tile_bed.py`
+(10k: 1x1, 50k: 5x1, 200k: 5x4 copies of the 20 d x 20 d column). The run uses the peer
+code's settings: Hertz-Mindlin with tangential history, d = 1 mm, rho = 2600 kg/m3,
+E = 1e7 Pa, nu = 0.3, e = 0.5, mu = 0.5, dt = 1e-6 s, skin 0.1 d, periodic in x and y.
+Each case runs in its own process (own Taichi precision and thread count): 300 warm-up
+steps, then the timed steps; peak resident memory of that process is reported too.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+BED = Path(__file__).resolve().parent.parent / "benchmarks" / "bed10k.npz"
+TILES = {10000: (1, 1), 50000: (5, 1), 200000: (5, 4)}
+COLUMN = 0.02  # m, lateral size of the settled column
+
+
+def tiled_bed(n: int) -> tuple[np.ndarray, tuple[float, float]]:
+    """Positions of an n-particle bed tiled from the settled 10k column, and its x/y extent."""
+    base = np.load(BED)["x"]
+    tx, ty = TILES.get(n, (max(1, round(n / len(base))), 1))
+    tiles = [base + [i * COLUMN, j * COLUMN, 0.0] for j in range(ty) for i in range(tx)]
+    return np.concatenate(tiles), (tx * COLUMN, ty * COLUMN)
+
+
+def bench_scene(x: np.ndarray, extent, precision: str) -> dict:
+    return {
+        "name": f"bench_{len(x)}",
+        "domain": {"min": [0.0, 0.0, 0.0], "max": [extent[0], extent[1], 0.03], "periodic": ["x", "y"], "walls": ["z-"]},
+        "contact": {"model": "hertz_mindlin"},
+        "materials": {"glass": {"density": 2600.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3,
+                                "restitution": 0.5, "friction": 0.5}},
+        "particles": [{"name": "bed", "material": "glass", "diameter": {"distribution": "mono", "value": 0.001},
+                       "positions": x.tolist()}],
+        "numerics": {"dt": 1e-6, "precision": precision, "skin": 0.1},
+    }
+
+
+def run_case(n: int, precision: str, steps: int, threads: int) -> dict:
+    """Time one case in this process (called in a child process by `run_matrix`)."""
+    import resource
+
+    from tidem.runtime import ensure_taichi
+
+    ensure_taichi("cpu", precision, threads)
+    from tidem.model import build_model
+    from tidem.scene.load import validate
+    from tidem.solver import Solver
+
+    x, extent = tiled_bed(n)
+    model = build_model(validate(bench_scene(x, extent, precision), "<bench>"))
+    solver = Solver(model)
+    for _ in range(300):
+        solver.step()
+    import taichi as ti
+
+    ti.sync()
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        solver.step()
+    ti.sync()
+    wall = time.perf_counter() - t0
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    e = solver.energies()
+    return {"particles": len(x), "precision": precision, "threads": threads, "steps": steps, "loop_s": wall,
+            "particle_steps_per_s": len(x) * steps / wall, "rebuilds": solver.rebuilds,
+            "contacts_per_particle": e["coordination"], "field_bytes_per_particle": model.memory_bytes() / len(x),
+            "peak_rss_MiB": rss / 2**20}
+
+
+def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int, out: Path | None) -> list[dict]:
+    """Run every (size, precision) case in a fresh process and print a table."""
+    rows = []
+    print(f"{'N':>8} {'precision':>9} {'threads':>7} {'steps':>6} {'loop s':>8} {'particle-steps/s':>17} "
+          f"{'B/particle (fields)':>20} {'peak RSS MiB':>12}")
+    for n in sizes:
+        for prec in precisions:
+            k = max(200, steps * 10000 // max(n, 10000) if n > 50000 else steps)
+            env = dict(os.environ, TI_CPU_MAX_NUM_THREADS=str(threads))
+            proc = subprocess.run([sys.executable, "-c", f"import json, tidem.bench as b; "
+                                   f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads})))"],
+                                  capture_output=True, text=True, env=env)
+            if proc.returncode != 0:
+                print(f"{n:>8} {prec:>9} failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr else ''}")
+                continue
+            row = json.loads(proc.stdout.strip().splitlines()[-1])
+            rows.append(row)
+            print(f"{n:>8} {prec:>9} {threads:>7} {k:>6} {row['loop_s']:>8.2f} {row['particle_steps_per_s']:>17.3g} "
+                  f"{row['field_bytes_per_particle']:>20.0f} {row['peak_rss_MiB']:>12.0f}", flush=True)
+    if out is not None:
+        Path(out).write_text(json.dumps(rows, indent=2))
+    return rows
