@@ -20,8 +20,9 @@ from .contact_laws import make_contact_response
 from .geometry import make_geometry
 
 
-def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S, track_contact_time: bool = False):
-    """Return `compute_forces(n, t, dt)`."""
+def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
+                      track_contact_time: bool = False, single_material: bool = False):
+    """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per particle."""
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
@@ -71,6 +72,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 torque = zero3
                 worst = 0.0
                 touching = 0
+                p_same = S.pp[0, 0]
                 for k in range(S.nbr_n[i]):
                     j = S.nbr[i, k]
                     d = min_image(S.x[j] - xi)
@@ -100,7 +102,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             mr = S.mr[i, k]
                         f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
                             nrm, delta, v_rel, wi - S.w[j], m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
-                            S.pp[mat_i, S.mat[j]], S.ft[i, k], mr, dmax, dt)
+                            p_same if ti.static(single_material) else S.pp[mat_i, S.mat[j]], S.ft[i, k], mr, dmax, dt)
                         force += f
                         torque += (ri * nrm).cross(f_t) + m_roll
                         S.ft[i, k] = xi_new

@@ -232,7 +232,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
             count = None  # fill every free lattice site of the region
         if g.region is not None:
             spacing = 1.02 * _largest(g.diameter)
-            sites = lattice_sites(g.region.min, g.region.max, spacing)
+            sites = lattice_sites(g.region.min, g.region.max, spacing, g.lattice)
             plane_geo = [(p["p0"], p["n"]) for p in planes]
             tube_geo = [(t["c"], t["mask"], t["r"]) for t in tubes]
             sites = sites[clear_of_obstacles(sites, 0.5 * spacing, plane_geo, tube_geo, lengths, periodic)]
@@ -255,7 +255,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
             act = np.ones(count, bool)
         elif g.region is not None:
             # fill bottom-up; random order within each layer
-            layer = np.round((sites[:, 2] - sites[0, 2]) / spacing).astype(int)
+            layer = np.unique(np.round(sites[:, 2], 9), return_inverse=True)[1]
             order = np.lexsort((rng.random(len(sites)), layer))
             pos = sites[order[:count]] + rng.uniform(-0.01, 0.01, (count, 3)) * spacing
             vel = np.tile(g.velocity, (count, 1))

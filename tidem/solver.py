@@ -39,7 +39,7 @@ class Solver:
         self.rebuilds = 0
         self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin, f.rolling, f.hysteretic, S)
         self._forces = make_force_kernel(model.grid, f.law, f.rolling, f.n_planes, f.n_tubes, model.wall_slots,
-                                         model.gravity, S, f.contact_time)
+                                         model.gravity, S, f.contact_time, model.pair_params.shape[0] == 1)
         self._kick_drift, self._kick = make_integrators(model.grid, S)
         self._energies = make_energy_kernel(model.gravity, S)
         self._recycle = None

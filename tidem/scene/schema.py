@@ -103,6 +103,7 @@ class ParticleGroup(Strict):
     diameter: Diameter = Field(discriminator="distribution")
     count: int | None = Field(default=None, gt=0)
     region: Box | None = None
+    lattice: Literal["cubic", "hexagonal"] = "cubic"
     positions: list[Vec3] | None = None
     pour: Pour | None = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
