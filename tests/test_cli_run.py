@@ -100,3 +100,21 @@ def test_check_prints_derived_numbers():
     assert result.exit_code == 0, result.output
     for word in ("Rayleigh time", "time step", "kernels:", "rolling resistance (model C)", "B/particle"):
         assert word in result.output
+
+
+@pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml"])
+def test_shipped_scene_smoke(tmp_path, name):
+    """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
+    out = tmp_path / name
+    result = runner.invoke(app, ["scene", name, "--smoke", "--out", str(out), "--quiet"])
+    assert result.exit_code == 0, result.output
+    run = json.loads((out / "run.json").read_text())
+    assert run["status"] == "finished" and 0 < run["steps"] <= 300
+    assert (out / "snapshots.pvd").exists()
+
+
+def test_every_shipped_scene_has_a_smoke_test():
+    from tidem.scene.load import shipped_scenes
+
+    params = test_shipped_scene_smoke.pytestmark[0].args[1]
+    assert sorted(shipped_scenes()) == sorted(params)

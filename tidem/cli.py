@@ -47,7 +47,7 @@ def _model(loaded, smoke=False, t_end=None):
 def scene(
     path: Annotated[Optional[str], typer.Argument(help="Scene file, or the name of a shipped scene (default: the default scene)")] = None,
     out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene name>)")] = None,
-    smoke: Annotated[bool, typer.Option(help="Run only numerics... output.smoke_steps steps (CI)")] = False,
+    smoke: Annotated[bool, typer.Option(help="Run only output.smoke_steps steps of the scene (CI)")] = False,
     t_end: Annotated[Optional[float], typer.Option("--t-end", help="End time [s], overrides numerics.t_end")] = None,
     set_: Sets = None,
     arch: Annotated[str, typer.Option(help="Taichi backend: cpu, cuda, vulkan or auto")] = "cpu",
