@@ -15,7 +15,7 @@ runner = CliRunner()
 
 def test_impact_scene_output_and_hertz(tmp_path):
     out = tmp_path / "impact"
-    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet"])
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render"])
     assert result.exit_code == 0, result.output
     run = json.loads((out / "run.json").read_text())
     for key in ("scene_echo", "tidem_version", "active_models", "particles", "steps", "dt_s", "wall_s",
@@ -56,7 +56,7 @@ def test_runaway_overlap_stops_with_particle_named(tmp_path):
     """Soft spheres hit hard: the run stops with a message naming the particle, exit 3, and
     the snapshots written before remain readable."""
     out = tmp_path / "soft"
-    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet",
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render",
                                  "--set", "materials.sus304.youngs_modulus=1e5",
                                  "--set", "numerics.check_interval=5"])
     assert result.exit_code == 3, result.output
@@ -79,7 +79,7 @@ def test_ctrl_c_keeps_finished_output(tmp_path, monkeypatch):
 
     monkeypatch.setattr(Solver, "step", step)
     out = tmp_path / "stop"
-    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet"])
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render"])
     assert result.exit_code == 130
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "interrupted" and run["steps"] == 300
@@ -106,7 +106,7 @@ def test_check_prints_derived_numbers():
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name
-    result = runner.invoke(app, ["scene", name, "--smoke", "--out", str(out), "--quiet"])
+    result = runner.invoke(app, ["scene", name, "--smoke", "--out", str(out), "--quiet", "--no-render"])
     assert result.exit_code == 0, result.output
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "finished" and 0 < run["steps"] <= 300

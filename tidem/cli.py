@@ -52,8 +52,9 @@ def scene(
     set_: Sets = None,
     arch: Annotated[str, typer.Option(help="Taichi backend: cpu, cuda, vulkan or auto")] = "cpu",
     quiet: Annotated[bool, typer.Option(help="No progress bar")] = False,
+    no_render: Annotated[bool, typer.Option("--no-render", help="Skip frames and movie")] = False,
 ):
-    """Run a scene: progress bar, snapshots, time series and run.json in the output folder."""
+    """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
     loaded = _load(path, set_)
     from tidem.runtime import BackendUnavailable, ensure_taichi
 
@@ -72,10 +73,70 @@ def scene(
     s = result.summary
     typer.echo(f"{result.status}: {s['steps']} steps in {s['wall_s']:.1f} s "
                f"({s['particle_steps_per_s']:.3g} particle-steps/s); output in {out_dir}", err=True)
+    if not no_render and result.status != "interrupted":
+        _render(out_dir, model.name, quiet=quiet)
     if result.status == "failed":
         _fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
     if result.status == "interrupted":
         _fail(result.message + f"; finished output is in {out_dir}", 130)
+
+
+def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_thickness=None, gif=None,
+            quiet=False) -> None:
+    """Frames and movie of a run folder; a machine without OpenGL gets a message, not a crash."""
+    import json
+
+    from tidem.render.gl import RenderUnavailable, prepare_offscreen
+
+    try:
+        prepare_offscreen()
+    except RenderUnavailable as exc:
+        typer.echo(f"tidem: not rendering: {exc}", err=True)
+        return
+    from tidem.render.movie import render_run, style_for
+
+    try:
+        style = style_for(run_dir, field, clim, view, slice_thickness)
+    except (ValueError, KeyError) as exc:
+        _fail(f"tidem render: {exc}", 2)
+    settings = json.loads((run_dir / "run.json").read_text()).get("render", {})
+
+    def report(k, n):
+        if not quiet:
+            typer.echo(f"\rrendering frame {k}/{n}", nl=k == n, err=True)
+
+    movie = render_run(run_dir, style, name, fps=settings.get("fps", 15),
+                       gif=settings.get("gif", False) if gif is None else gif, progress=report)
+    typer.echo(f"frames in {run_dir / 'frames'}, movie {movie}", err=True)
+
+
+@app.command()
+def render(
+    run_dir: Annotated[Path, typer.Argument(help="A run folder (with run.json and snapshots.pvd)")],
+    field: Annotated[Optional[str], typer.Option(help="speed, temperature, radius, group or contacts")] = None,
+    range_: Annotated[Optional[str], typer.Option("--range", help="Colour range LOW,HIGH")] = None,
+    view: Annotated[Optional[str], typer.Option(help="front, side, top or iso")] = None,
+    slice_: Annotated[Optional[float], typer.Option("--slice", help="Show only a mid-depth slice this thick [m]")] = None,
+    gif: Annotated[bool, typer.Option(help="Also write a GIF")] = False,
+):
+    """Re-render frames and the movie of a finished run from its snapshots, with other settings."""
+    import json
+
+    if not (run_dir / "run.json").exists() or not (run_dir / "snapshots.pvd").exists():
+        _fail(f"{run_dir}: not a run folder (run.json and snapshots.pvd are missing)", 2)
+    clim = None
+    if range_ is not None:
+        try:
+            lo, hi = (float(v) for v in range_.split(","))
+        except ValueError:
+            _fail(f"--range {range_}: expected two numbers LOW,HIGH, e.g. --range 0,0.5", 2)
+        if hi <= lo:
+            _fail(f"--range {range_}: HIGH must exceed LOW", 2)
+        clim = (lo, hi)
+    if view is not None and view not in ("front", "side", "top", "iso"):
+        _fail(f"--view {view}: choose front, side, top or iso", 2)
+    name = json.loads((run_dir / "run.json").read_text()).get("scene", run_dir.name)
+    _render(run_dir, name, field, clim, view, slice_, gif or None)
 
 
 @app.command()

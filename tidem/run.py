@@ -101,6 +101,12 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
         "particle_steps_per_s": n * steps / wall if wall > 0 else 0.0,
         "precision": f.precision,
         "scene_echo": model.loaded.raw,
+        "render": model.scene.render.model_dump(exclude_none=True),
+        "render_geometry": {
+            "bounds": [v for a in range(3) for v in (model.scene.domain.min[a], model.scene.domain.max[a])],
+            "periodic": list(model.grid.periodic),
+            "tubes": [{"c": t["c"], "mask": t["mask"], "r": t["r"]} for t in model.tubes],
+        },
     }
     if solver is not None and f.contact_time:
         out["observables"] = {"contact_time": contact_times(model, solver)}

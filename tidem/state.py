@@ -45,16 +45,22 @@ def allocate(model: Model) -> State:
     fb = ti.FieldsBuilder()
     S = State()
 
-    def place(shape, name, dtype=fp, n=None):
+    def make(name, dtype=fp, n=None):
         fld = ti.field(dtype) if n is None else ti.Vector.field(n, dtype)
-        fb.dense(ti.ij if len(shape) == 2 else ti.i, shape).place(fld)
         setattr(S, name, fld)
+        return fld
 
-    for name in ("x", "v", "w", "f", "tq", "x_build"):
+    def place(shape, name, dtype=fp, n=None):
+        fb.dense(ti.ij if len(shape) == 2 else ti.i, shape).place(make(name, dtype, n))
+
+    # What the pair loop reads of a partner sits together in memory (array of structs).
+    hot = [make(k, n=3) for k in ("x", "v", "w")] + [make("radius"), make("mass"), make("mat", ti.i32)]
+    fb.dense(ti.i, N).place(*hot)
+    for name in ("f", "tq", "x_build"):
         place((N,), name, n=3)
-    for name in ("radius", "mass", "inv_mass", "inv_inertia", "ovl"):
+    for name in ("inv_mass", "inv_inertia", "ovl"):
         place((N,), name)
-    for name in ("mat", "active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask"):
+    for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask"):
         place((N,), name, ti.i32)
     if feat.contact_time:
         place((N,), "touch_start")

@@ -211,6 +211,25 @@ class Output(Strict):
     smoke_steps: int = Field(default=300, ge=1)
 
 
+class Render(Strict):
+    """Frames and movie of a run (`tidem render` can redo them with other settings)."""
+
+    field: Literal["speed", "temperature", "radius", "group", "contacts"] | None = None
+    range: tuple[Number, Number] | None = None
+    colormap: str | None = None
+    view: Literal["front", "side", "top", "iso"] = "front"
+    height: int = Field(default=720, ge=240, le=2160)
+    slice: Positive | None = None
+    fps: int = Field(default=15, ge=1, le=120)
+    gif: bool = False
+
+    @model_validator(mode="after")
+    def _range(self):
+        if self.range is not None and self.range[1] <= self.range[0]:
+            raise ValueError(f"range: the upper end must exceed the lower ({list(self.range)})")
+        return self
+
+
 class Scene(Strict):
     """A whole scene file."""
 
@@ -226,4 +245,5 @@ class Scene(Strict):
     outlet: Outlet | None = None
     numerics: Numerics = Numerics()
     output: Output = Output()
+    render: Render = Render()
     observables: list[Literal["contact_time"]] = []

@@ -1,0 +1,72 @@
+"""Frames show real content: size, colours at the right end of the colour map, tubes."""
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tidem.cli import app
+from tidem.io.vtp import write_vtp
+from tidem.render.frames import FrameStyle, frame_size, render_frame
+from tidem.render.gl import RenderUnavailable, prepare_offscreen
+
+try:
+    prepare_offscreen()
+except RenderUnavailable:  # pragma: no cover
+    pytest.skip("no off-screen OpenGL library", allow_module_level=True)
+
+BOUNDS = (0.0, 0.2, 0.0, 0.02, 0.0, 0.1)
+
+
+def coloured(img, region):
+    """Pixels of a region that are neither background white nor near-black edges."""
+    sub = img[region].reshape(-1, img.shape[2])[:, :3].astype(float)
+    keep = (sub.sum(axis=1) < 700) & (sub.max(axis=1) > 60)
+    return sub[keep]
+
+
+def test_slow_and_fast_particles_take_the_two_ends_of_the_colour_map(tmp_path):
+    import imageio.v2 as imageio
+
+    snap = tmp_path / "s.vtp"
+    write_vtp(snap, np.array([[0.05, 0.01, 0.05], [0.15, 0.01, 0.05]]),
+              {"radius": np.array([0.02, 0.02]), "velocity": np.array([[0.0, 0, 0], [1.0, 0, 0]])})
+    style = FrameStyle(field="speed", clim=(0.0, 1.0), colormap="viridis", size=frame_size("front", BOUNDS),
+                       view="front", bounds=BOUNDS, tubes=[])
+    png = tmp_path / "f.png"
+    render_frame(snap, 0.0, style, png)
+    img = imageio.imread(png)
+    assert img.shape[:2] == (style.size[1], style.size[0])
+    plot_w = int(0.8 * img.shape[1])
+    slow = coloured(img, np.s_[:, : plot_w // 2])
+    fast = coloured(img, np.s_[:, plot_w // 2: plot_w])
+    assert len(slow) > 500 and len(fast) > 500
+    r, g, b = slow.mean(axis=0)
+    assert b > g and b > r, "the slow particle is at the dark purple end of viridis"
+    r, g, b = fast.mean(axis=0)
+    assert g > b and r > b, "the fast particle is at the yellow end of viridis"
+
+
+def test_scene_run_writes_frames_and_movie(tmp_path):
+    out = tmp_path / "run"
+    result = CliRunner().invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet",
+                                      "--set", "output.snapshots=4"])
+    assert result.exit_code == 0, result.output
+    frames = sorted((out / "frames").glob("frame_*.png"))
+    assert len(frames) == (out / "snapshots.pvd").read_text().count("<DataSet")
+    movie = out / "sphere_impact.mp4"
+    assert movie.stat().st_size > 1000
+    import imageio.v2 as imageio
+
+    reader = imageio.get_reader(movie)
+    assert reader.count_frames() == len(frames)
+    # re-render with another field and range, without re-running
+    result = CliRunner().invoke(app, ["render", str(out), "--field", "contacts", "--range", "0,1"])
+    assert result.exit_code == 0, result.output
+    assert json.loads((out / "run.json").read_text())["status"] == "finished"
+
+
+def test_render_refuses_bad_options(tmp_path):
+    result = CliRunner().invoke(app, ["render", str(tmp_path)])
+    assert result.exit_code == 2 and "not a run folder" in result.output

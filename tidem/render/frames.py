@@ -1,0 +1,138 @@
+"""Frames: one PNG per snapshot, particles as shaded spheres coloured by a field.
+
+Spheres are point sprites (VTK's point-Gaussian mapper with a per-point scale array and
+`render_points_as_spheres`), about 10x faster than glyph meshes on a CPU renderer and
+indistinguishable at video resolution. One colour range is used for the whole movie, so
+colours mean the same in every frame. Tubes are drawn as cylinders, the domain as an
+outline, and the simulated time as a stamp.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tidem.io.vtp import read_vtp
+from tidem.render.gl import prepare_offscreen
+
+FIELDS = {
+    "speed": ("Speed [m/s]", "viridis"),
+    "temperature": ("Temperature [K]", "inferno"),
+    "radius": ("Radius [m]", "cividis"),
+    "group": ("Group", "tab10"),
+    "contacts": ("Contacts", "magma"),
+}
+
+
+@dataclass
+class FrameStyle:
+    """What a frame shows and how; built from the scene's [render] table and CLI options."""
+
+    field: str
+    clim: tuple[float, float]
+    colormap: str
+    size: tuple[int, int]
+    view: str
+    bounds: tuple[float, ...]  # xmin, xmax, ymin, ymax, zmin, zmax
+    tubes: list[dict]
+    periodic: tuple[bool, bool, bool] = (False, False, False)
+    slice_thickness: float | None = None
+
+
+def field_values(field: str, data: dict) -> np.ndarray:
+    if field == "speed":
+        return np.linalg.norm(data["velocity"], axis=1)
+    if field not in data:
+        raise KeyError(f"the snapshots have no '{field}' array; available: speed, {', '.join(sorted(data))}")
+    return np.asarray(data[field], dtype=float)
+
+
+def frame_size(view: str, bounds, height: int = 720) -> tuple[int, int]:
+    """Window size that fits the domain's projection, plus room for the colour bar (multiples of 16)."""
+    ext = {"front": (bounds[1] - bounds[0], bounds[5] - bounds[4]),
+           "side": (bounds[3] - bounds[2], bounds[5] - bounds[4]),
+           "top": (bounds[1] - bounds[0], bounds[3] - bounds[2])}.get(view, (1.6, 1.0))
+    aspect = ext[0] / ext[1]
+    width = int(np.clip(height * aspect * 1.1 + 240, 480, 1920))
+    return (width + 15) // 16 * 16, (height + 15) // 16 * 16
+
+
+def tube_images(tube: dict, lo, hi, periodic) -> list[np.ndarray]:
+    """Tube centre and its periodic images that reach into the box."""
+    out = [np.array(tube["c"], dtype=float)]
+    for a in range(3):
+        if periodic[a] and tube["mask"][a]:
+            length = hi[a] - lo[a]
+            out += [c + s * length * np.eye(3)[a] for c in list(out) for s in (-1, 1)
+                    if lo[a] - tube["r"] < c[a] + s * length < hi[a] + tube["r"]]
+    return out
+
+
+def place_camera(pl, style: FrameStyle) -> None:
+    """Parallel projection that fits the domain in the left 80 % of the frame (the colour bar
+    takes the rest)."""
+    lo, hi = np.array(style.bounds[0::2]), np.array(style.bounds[1::2])
+    centre = 0.5 * (lo + hi)
+    axes = {"front": (0, 2, 1, -1), "side": (1, 2, 0, 1), "top": (0, 1, 2, 1)}
+    if style.view not in axes:
+        pl.view_isometric()
+        pl.reset_camera(bounds=style.bounds)
+        return
+    h_ax, v_ax, d_ax, sign = axes[style.view]
+    width, height = hi[h_ax] - lo[h_ax], hi[v_ax] - lo[v_ax]
+    aspect = 0.8 * style.size[0] / style.size[1]
+    half = 0.56 * max(height, width / aspect)
+    focal = centre.copy()
+    focal[h_ax] += 0.1 * (2 * half * style.size[0] / style.size[1])  # shift the domain left of the bar
+    position = focal.copy()
+    position[d_ax] += sign * 10 * max(hi - lo)
+    up = np.zeros(3)
+    up[v_ax] = 1.0
+    pl.camera.position, pl.camera.focal_point, pl.camera.up = position, focal, up
+    pl.enable_parallel_projection()
+    pl.camera.parallel_scale = half
+    pl.reset_camera_clipping_range()
+
+
+def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) -> None:
+    """Render one snapshot to a PNG."""
+    prepare_offscreen()
+    import pyvista as pv
+
+    points, data = read_vtp(snapshot)
+    values = field_values(style.field, data)
+    radius = np.asarray(data["radius"], dtype=float)
+    if style.slice_thickness is not None and len(points):
+        mid = 0.5 * (style.bounds[2] + style.bounds[3])
+        keep = np.abs(points[:, 1] - mid) <= 0.5 * style.slice_thickness
+        points, values, radius = points[keep], values[keep], radius[keep]
+    title, _ = FIELDS.get(style.field, (style.field, "viridis"))
+    pl = pv.Plotter(off_screen=True, window_size=list(style.size))
+    pl.set_background("white")
+    if len(points):
+        cloud = pv.PolyData(np.ascontiguousarray(points, dtype=np.float32))
+        cloud["values"] = values
+        cloud["radius"] = radius
+        actor = pl.add_mesh(
+            cloud, scalars="values", style="points_gaussian", render_points_as_spheres=True, emissive=False,
+            cmap=style.colormap, clim=style.clim,
+            scalar_bar_args=dict(title=title, fmt="%.3g", color="black", vertical=True,
+                                 position_x=0.86, position_y=0.15, height=0.7, width=0.05),
+        )
+        actor.mapper.scale_array = "radius"
+        actor.mapper.scale_factor = 1.0
+    lo, hi = np.array(style.bounds[0::2]), np.array(style.bounds[1::2])
+    for t in style.tubes:
+        axis = np.asarray(t["mask"]) == 0.0
+        length = float((hi - lo)[axis][0])
+        for centre in tube_images(t, lo, hi, style.periodic):
+            centre[axis] = 0.5 * (lo + hi)[axis]
+            cyl = pv.Cylinder(center=centre, direction=axis.astype(float), radius=t["r"], height=length, resolution=64)
+            pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color="#8c8c8c", smooth_shading=True)
+    pl.add_mesh(pv.Box(bounds=style.bounds).outline(), color="black", line_width=1)
+    pl.add_text(f"t = {time:.4g} s", position="upper_left", font_size=12, color="black")
+    place_camera(pl, style)
+    pl.screenshot(str(out_png))
+    pl.close()
