@@ -25,9 +25,27 @@ TILES = {10000: (1, 1), 50000: (5, 1), 200000: (5, 4)}
 COLUMN = 0.02  # m, lateral size of the settled column
 
 
-def tiled_bed(n: int) -> tuple[np.ndarray, tuple[float, float]]:
-    """Positions of an n-particle bed tiled from the settled 10k column, and its x/y extent."""
-    base = np.load(BED)["x"]
+def read_lammps_bed(path: Path) -> tuple[np.ndarray, tuple[float, float]]:
+    """Positions and x/y extent from a LAMMPS/LIGGGHTS granular data file
+    (`id type diameter density x y z` atoms, as written by shared/bench/peers/tile_bed.py)."""
+    lines = Path(path).read_text().splitlines()
+    extent = [0.0, 0.0]
+    for line in lines[:20]:
+        parts = line.split()
+        if len(parts) == 4 and parts[2] in ("xlo", "ylo"):
+            extent["xy".index(parts[2][0])] = float(parts[1]) - float(parts[0])
+    start = next(k for k, line in enumerate(lines) if line.strip() == "Atoms") + 1
+    atoms = np.loadtxt(lines[start:], ndmin=2)
+    atoms = atoms[np.argsort(atoms[:, 0])]
+    return atoms[:, 4:7], (extent[0], extent[1])
+
+
+def tiled_bed(n: int, bed: Path | None = None) -> tuple[np.ndarray, tuple[float, float]]:
+    """Positions of an n-particle bed tiled from the settled 10k column, and its x/y extent;
+    or the bed of a LAMMPS data file when `bed` is given."""
+    if bed is not None and Path(bed).suffix == ".data":
+        return read_lammps_bed(bed)
+    base = np.load(bed or BED)["x"]
     tx, ty = TILES.get(n, (max(1, round(n / len(base))), 1))
     tiles = [base + [i * COLUMN, j * COLUMN, 0.0] for j in range(ty) for i in range(tx)]
     return np.concatenate(tiles), (tx * COLUMN, ty * COLUMN)
@@ -46,7 +64,7 @@ def bench_scene(x: np.ndarray, extent, precision: str) -> dict:
     }
 
 
-def run_case(n: int, precision: str, steps: int, threads: int) -> dict:
+def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None = None) -> dict:
     """Time one case in this process (called in a child process by `run_matrix`)."""
     import resource
 
@@ -57,7 +75,7 @@ def run_case(n: int, precision: str, steps: int, threads: int) -> dict:
     from tidem.scene.load import validate
     from tidem.solver import Solver
 
-    x, extent = tiled_bed(n)
+    x, extent = tiled_bed(n, Path(bed) if bed else None)
     model = build_model(validate(bench_scene(x, extent, precision), "<bench>"))
     solver = Solver(model)
     for _ in range(300):
@@ -78,8 +96,11 @@ def run_case(n: int, precision: str, steps: int, threads: int) -> dict:
             "peak_rss_MiB": rss / 2**20}
 
 
-def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int, out: Path | None) -> list[dict]:
+def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int, out: Path | None,
+               bed: Path | None = None) -> list[dict]:
     """Run every (size, precision) case in a fresh process and print a table."""
+    if bed is not None:
+        sizes = [len(tiled_bed(0, bed)[0])]
     rows = []
     print(f"{'N':>8} {'precision':>9} {'threads':>7} {'steps':>6} {'loop s':>8} {'particle-steps/s':>17} "
           f"{'B/particle (fields)':>20} {'peak RSS MiB':>12}")
@@ -88,7 +109,7 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
             k = max(200, steps * 10000 // max(n, 10000) if n > 50000 else steps)
             env = dict(os.environ, TI_CPU_MAX_NUM_THREADS=str(threads))
             proc = subprocess.run([sys.executable, "-c", f"import json, tidem.bench as b; "
-                                   f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads})))"],
+                                   f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads}, {str(bed) if bed else None!r})))"],
                                   capture_output=True, text=True, env=env)
             if proc.returncode != 0:
                 print(f"{n:>8} {prec:>9} failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr else ''}")

@@ -185,12 +185,18 @@ def bench(
     steps: Annotated[int, typer.Option(help="Timed steps per case (scaled down for large N)")] = 2000,
     threads: Annotated[int, typer.Option(help="CPU threads")] = 2,
     out: Annotated[Optional[Path], typer.Option(help="Write results as JSON here")] = None,
+    bed: Annotated[Optional[Path], typer.Option(help="Use this bed instead: a LAMMPS/LIGGGHTS data file "
+                                                "(id type diameter density x y z) or an .npz with 'x'")] = None,
 ):
     """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history)."""
     from tidem.bench import run_matrix
 
+    if precision not in ("float32", "float64", "both"):
+        _fail(f"--precision {precision}: choose float32, float64 or both", 2)
+    if bed is not None and not bed.exists():
+        _fail(f"--bed {bed}: no such file", 2)
     run_matrix([int(s) for s in sizes.split(",")], ["float32", "float64"] if precision == "both" else [precision],
-               steps, threads, out)
+               steps, threads, out, bed)
 
 
 def main() -> None:  # pragma: no cover

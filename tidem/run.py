@@ -116,9 +116,11 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
 def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | None = None) -> RunResult:
     """Run `model` to its end time, writing to `out_dir`."""
     out = Output(out_dir, model)
-    t0 = time.perf_counter()
     out.write_summary(summary(model, None, "starting", 0.0))
+    t_setup = time.perf_counter()
     solver = solver or Solver(model)
+    t0 = time.perf_counter()
+    setup_s = t0 - t_setup
     scene = model.scene
     t_end = model.t_end
     snap_dt = scene.output.interval or t_end / scene.output.snapshots
@@ -153,5 +155,6 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         out.series.close()
         wall = time.perf_counter() - t0
         data = summary(model, solver, status, wall, message)
+        data["setup_s"] = setup_s
         out.write_summary(data)
     return RunResult(status=status, out_dir=Path(out_dir), steps=solver.steps, wall_s=wall, message=message, summary=data)
