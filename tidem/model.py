@@ -13,7 +13,7 @@ import numpy as np
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.geometry import Grid
 from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
-from tidem.scene.checks import max_diameter
+from tidem.scene.checks import largest_diameter, max_diameter
 from tidem.scene.errors import SceneError
 from tidem.scene.load import LoadedScene
 from tidem.timestep import TimeScales, time_scales
@@ -156,7 +156,7 @@ def _pair_vector(a, b, wall_friction=None) -> np.ndarray:
     return p
 
 
-def _surfaces(scene, mats: dict, default_mat: str):
+def _surfaces(scene, default_mat: str):
     """Planes (box sides, walls, outlet plate) and tubes with their materials and friction."""
     dom = scene.domain
     planes: list[dict] = []
@@ -191,15 +191,6 @@ def _surfaces(scene, mats: dict, default_mat: str):
     return planes, tubes
 
 
-def _largest(dist) -> float:
-    """Largest diameter a distribution can produce (its cut-off)."""
-    if dist.distribution == "mono":
-        return dist.value
-    if dist.distribution == "uniform":
-        return dist.max
-    return dist.max if dist.max is not None else (dist.mean + 4 * dist.std if dist.distribution == "normal" else dist.median * np.exp(4 * dist.sigma))
-
-
 def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = None) -> Model:
     """Derive the Model from a validated scene; raises SceneError for problems found here."""
     scene = loaded.scene
@@ -214,7 +205,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
                                    "contact.model = 'linear'" for n in low])
     mat_names = list(mats)
     default_mat = scene.particles[0].material
-    planes, tubes = _surfaces(scene, mats, default_mat)
+    planes, tubes = _surfaces(scene, default_mat)
     periodic = tuple(AXES[a] in dom.periodic for a in range(3))
     lengths = [dom.max[a] - dom.min[a] for a in range(3)]
 
@@ -231,7 +222,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         else:
             count = None  # fill every free lattice site of the region
         if g.region is not None:
-            spacing = 1.02 * _largest(g.diameter)
+            spacing = 1.02 * largest_diameter(g.diameter)
             sites = lattice_sites(g.region.min, g.region.max, spacing, g.lattice)
             plane_geo = [(p["p0"], p["n"]) for p in planes]
             tube_geo = [(t["c"], t["mask"], t["r"]) for t in tubes]

@@ -7,20 +7,21 @@ from tidem.scene.schema import Scene
 AXES = "xyz"
 
 
+def largest_diameter(dist) -> float:
+    """Largest diameter a size distribution can produce [m]: its cut-off (an open normal or
+    log-normal, allowed only with zero spread, gives its mean or median)."""
+    if dist.distribution == "mono":
+        return dist.value
+    if dist.distribution == "uniform":
+        return dist.max
+    if dist.max is not None:
+        return dist.max
+    return dist.mean if dist.distribution == "normal" else dist.median
+
+
 def max_diameter(scene: Scene) -> float:
-    """Largest particle diameter the scene can produce [m] (cut-offs of open distributions)."""
-    out = 0.0
-    for g in scene.particles:
-        d = g.diameter
-        if d.distribution == "mono":
-            out = max(out, d.value)
-        elif d.distribution == "normal":
-            out = max(out, d.max if d.max is not None else d.mean)
-        elif d.distribution == "lognormal":
-            out = max(out, d.max if d.max is not None else d.median)
-        else:
-            out = max(out, d.max)
-    return out
+    """Largest particle diameter the scene can produce [m]."""
+    return max(largest_diameter(g.diameter) for g in scene.particles)
 
 
 def cross_checks(scene: Scene) -> list[str]:
