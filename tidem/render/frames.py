@@ -130,7 +130,7 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
         for centre in tube_images(t, lo, hi, style.periodic):
             centre[axis] = 0.5 * (lo + hi)[axis]
             cyl = pv.Cylinder(center=centre, direction=axis.astype(float), radius=t["r"], height=length, resolution=64)
-            pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color="#8c8c8c", smooth_shading=True)
+            pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color="#9a9a9a", lighting=False)
     pl.add_mesh(pv.Box(bounds=style.bounds).outline(), color="black", line_width=1)
     pl.add_text(f"t = {time:.4g} s", position="upper_left", font_size=12, color="black")
     place_camera(pl, style)
