@@ -65,6 +65,7 @@ def make_contact_response(law: int, rolling: bool):
         f_n = 0.0
         k_ref = 0.0  # stiffness for the tangential and rolling springs
         eta_scale = 0.0
+        root = 0.0
         if ti.static(law == HERTZ):
             root = ti.sqrt(r_eff * delta)
             s_n = 2.0 * p[ESTAR] * root
@@ -90,7 +91,7 @@ def make_contact_response(law: int, rolling: bool):
         # tangential spring with Coulomb cap
         k_t = k_ref * p[KAPPA]
         if ti.static(law == HERTZ):
-            k_t = 8.0 * p[GSTAR] * ti.sqrt(r_eff * delta)
+            k_t = 8.0 * p[GSTAR] * root
         eta_t = eta_scale * p[GAMMA] * ti.sqrt(k_t * m_eff)
         xi = rotate_into_plane(xi, n) + v_t * dt
         f_t = -k_t * xi - eta_t * v_t

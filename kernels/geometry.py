@@ -38,13 +38,14 @@ def make_geometry(grid: Grid):
     per = grid.periodic
     cells = grid.cells
     inv_cell = ti.Vector([1.0 / s for s in grid.cell_size])
+    inv_length = ti.Vector([1.0 / L for L in grid.length])
 
     @ti.func
     def min_image(d):
         """Shortest periodic image of a separation vector d = x_j - x_i."""
         for a in ti.static(range(3)):
             if ti.static(per[a]):
-                d[a] -= length[a] * ti.round(d[a] / length[a])
+                d[a] -= length[a] * ti.round(d[a] * inv_length[a])
         return d
 
     @ti.func
