@@ -7,7 +7,6 @@ Ctrl-C exits with 130 after the same.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -198,10 +197,3 @@ def bench(
     run_matrix([int(s) for s in sizes.split(",")], ["float32", "float64"] if precision == "both" else [precision],
                steps, threads, out, bed)
 
-
-def main() -> None:  # pragma: no cover
-    app(prog_name="tidem")
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -108,7 +108,7 @@ class Solver:
     def energies(self) -> dict:
         """Kinetic, rotational and potential energy [J], contacts per particle, active count."""
         self._energies(self.n)
-        e_kin, e_rot, e_pot, contacts, active = self.state.sums.to_numpy()
+        e_kin, e_rot, e_pot, contacts, active = (float(v) for v in self.state.sums.to_numpy())
         return dict(kinetic_energy_J=e_kin, rotational_energy_J=e_rot, potential_energy_J=e_pot,
                     coordination=contacts / max(active, 1.0), particles=int(active))
 

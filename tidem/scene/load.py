@@ -91,7 +91,7 @@ def apply_override(raw: dict, assignment: str) -> None:
     node[last] = value
 
 
-def load(name_or_path: str | None, overrides: list[str] = (), extra: dict | None = None) -> LoadedScene:
+def load(name_or_path: str | None, overrides: list[str] = ()) -> LoadedScene:
     """Load and validate a scene; raises `SceneError` listing every problem."""
     path = resolve(name_or_path)
     source = str(path)
@@ -106,8 +106,6 @@ def load(name_or_path: str | None, overrides: list[str] = (), extra: dict | None
             apply_override(raw, assignment)
         except (ValueError, TypeError, KeyError) as exc:
             errors.append(str(exc))
-    for k, v in (extra or {}).items():
-        apply_override(raw, f"{k}={v!r}" if isinstance(v, str) else f"{k}={v}")
     if errors:
         raise SceneError(source, errors)
     return validate(raw, source, default_name=path.stem)
