@@ -54,13 +54,17 @@ def scene(
     no_render: Annotated[bool, typer.Option("--no-render", help="Skip frames and movie")] = False,
 ):
     """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
+    if arch not in ("cpu", "cuda", "vulkan", "auto"):
+        _fail(f"--arch {arch}: choose cpu, cuda, vulkan or auto", 2)
+    if t_end is not None and not t_end > 0:
+        _fail(f"--t-end {t_end}: the end time must be > 0 s", 2)
     loaded = _load(path, set_)
     from tidem.runtime import BackendUnavailable, ensure_taichi
 
     try:
         ensure_taichi(arch, loaded.scene.numerics.precision)
-    except (BackendUnavailable, KeyError) as exc:
-        _fail(f"--arch {arch}: {exc}", 2)
+    except BackendUnavailable as exc:
+        _fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
     model = _model(loaded, smoke=smoke, t_end=t_end)
     from tidem.run import run
 

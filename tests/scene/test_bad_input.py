@@ -145,3 +145,15 @@ def test_invalid_toml(tmp_path):
     path.write_text("[domain\nmin = 1")
     result = run_check(path)
     assert result.exit_code == 2 and "not valid TOML" in result.output
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["scene", "sphere_impact", "--arch", "tpu"], "--arch tpu: choose cpu, cuda, vulkan or auto"),
+    (["scene", "sphere_impact", "--t-end", "-1"], "--t-end -1.0: the end time must be > 0 s"),
+    (["scene", "sphere_impact", "--set", "numerics.t_end"], "expected KEY=VALUE"),
+    (["bench", "--precision", "half"], "--precision half: choose float32, float64 or both"),
+])
+def test_bad_command_line_options(args, expected):
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert expected in result.output and "Traceback" not in result.output
