@@ -110,7 +110,11 @@ def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_th
 
     movie = render_run(run_dir, style, name, fps=settings.get("fps", 15),
                        gif=settings.get("gif", False) if gif is None else gif, progress=report)
-    typer.echo(f"frames in {run_dir / 'frames'}, movie {movie}", err=True)
+    from tidem.render.plots import plot_timeseries
+
+    plots = plot_timeseries(run_dir)
+    typer.echo(f"frames in {run_dir / 'frames'}, movie {movie}"
+               f"{f', plots in {plots[0].parent}' if plots else ''}", err=True)
 
 
 @app.command()

@@ -61,6 +61,8 @@ def test_scene_run_writes_frames_and_movie(tmp_path):
 
     reader = imageio.get_reader(movie)
     assert reader.count_frames() == len(frames)
+    for plot in ("energy.png", "timeseries.png"):
+        assert (out / "plots" / plot).stat().st_size > 10000
     # re-render with another field and range, without re-running
     result = CliRunner().invoke(app, ["render", str(out), "--field", "contacts", "--range", "0,1"])
     assert result.exit_code == 0, result.output
