@@ -18,11 +18,14 @@ import taichi as ti
 
 from .contact_laws import make_contact_response
 from .geometry import make_geometry
+from .heat import spot_conductance, wall_conductance
 
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
-                      track_contact_time: bool = False, single_material: bool = False):
-    """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per particle."""
+                      track_contact_time: bool = False, single_material: bool = False, heat: bool = False):
+    """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
+    particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
+    the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0)."""
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
@@ -60,6 +63,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
 
     @ti.kernel
     def compute_forces(n: ti.i32, t: float, dt: float):
+        if ti.static(heat):
+            for s in range(n_surf):
+                S.surf_rate[s] = 0.0
         for i in range(n):
             if S.active[i]:
                 xi = S.x[i]
@@ -72,6 +78,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 torque = zero3
                 worst = 0.0
                 touching = 0
+                heat_in = 0.0
                 p_same = S.pp[0, 0]
                 for k in range(S.nbr_n[i]):
                     j = S.nbr[i, k]
@@ -106,6 +113,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         force += f
                         torque += (ri * nrm).cross(f_t) + m_roll
                         S.ft[i, k] = xi_new
+                        if ti.static(heat):
+                            p_pair = p_same if ti.static(single_material) else S.pp[mat_i, S.mat[j]]
+                            heat_in += spot_conductance(p_pair, r_eff, delta) * (S.T[j] - S.T[i])
                         if ti.static(rolling):
                             S.mr[i, k] = mr_new
                         if ti.static(hysteretic):
@@ -154,6 +164,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             force += f
                             torque += (ri * nrm).cross(f_t) + m_roll
                             S.wft[i, slot] = xi_new
+                            if ti.static(heat):
+                                if S.surf_T[s] > 0.0:
+                                    flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (S.surf_T[s] - S.T[i])
+                                    heat_in += flow
+                                    ti.atomic_add(S.surf_rate[s], flow)
                             if ti.static(rolling):
                                 S.wmr[i, slot] = mr_new
                             if ti.static(hysteretic):
@@ -166,6 +181,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 S.wmask[i] = held
                 S.f[i] = force
                 S.tq[i] = torque
+                if ti.static(heat):
+                    S.q[i] = heat_in
                 S.ovl[i] = worst
                 if ti.static(track_contact_time):
                     if touching > 0 and S.touch_start[i] < 0.0:

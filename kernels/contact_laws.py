@@ -38,7 +38,10 @@ import taichi as ti
 
 # Indices into a material-pair parameter vector.
 ESTAR, GSTAR, GAMMA, KAPPA, MU_S, MU_D, MU_R, ETA_R, UNLOAD_RATIO, E_I, E_J = range(11)
-N_PARAMS = 11
+# heat conduction (kernels/heat.py): solid conductivity of the pair, contact-radius correction
+# for a softened modulus, gas conductivity, mean free path + roughness (wall contacts)
+K_EFF, A_CORR, LAMBDA_GAS, GAP = range(11, 15)
+N_PARAMS = 15
 
 LINEAR, HERTZ, HYSTERETIC = 0, 1, 2
 LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC}

@@ -17,7 +17,7 @@ def make_energy_kernel(gravity, S):
             if S.active[i]:
                 m = S.mass[i]
                 S.sums[0] += 0.5 * m * S.v[i].norm_sqr()
-                S.sums[1] += 0.5 * S.w[i].norm_sqr() / S.inv_inertia[i]
+                S.sums[1] += 0.2 * m * S.radius[i] ** 2 * S.w[i].norm_sqr()
                 S.sums[2] += -m * g.dot(S.x[i])
                 S.sums[3] += S.ncontact[i]
                 S.sums[4] += 1.0

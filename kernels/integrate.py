@@ -13,8 +13,9 @@ import taichi as ti
 from .geometry import make_geometry
 
 
-def make_integrators(grid, S):
-    """Return (kick_drift(n, dt), kick(n, dt))."""
+def make_integrators(grid, S, heat: bool = False, n_surf: int = 0):
+    """Return (kick_drift(n, dt), kick(n, dt)); with heat, `kick` also advances temperatures
+    explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s."""
     min_image, wrap, _cc, _cid = make_geometry(grid)
 
     @ti.kernel
@@ -30,9 +31,14 @@ def make_integrators(grid, S):
 
     @ti.kernel
     def kick(n: ti.i32, dt: float):
+        if ti.static(heat):
+            for s in range(n_surf):
+                S.surf_energy[s] += dt * S.surf_rate[s]
         for i in range(n):
             if S.active[i]:
                 S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]
                 S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
+                if ti.static(heat):
+                    S.T[i] += dt * S.q[i] * S.inv_heat_cap[i]
 
     return kick_drift, kick

@@ -34,6 +34,7 @@ class Features:
     recycle: bool
     contact_time: bool
     precision: str
+    heat: bool = False
 
     def kernels(self) -> list[str]:
         law = {cl.LINEAR: "linear", cl.HERTZ: "hertz_mindlin", cl.HYSTERETIC: "hysteretic"}[self.law]
@@ -48,6 +49,8 @@ class Features:
             out.append("outlet recycle")
         if self.contact_time:
             out.append("contact-time observer")
+        if self.heat:
+            out.append("heat (contact-spot conduction, wall/tube conduction after Schluender)")
         return out
 
 
@@ -79,6 +82,10 @@ class Model:
     wall_slots: int
     t_end: float
     gravity: tuple[float, float, float]
+    fixed: np.ndarray | None = None
+    temperature0: np.ndarray | None = None
+    heat_capacity: np.ndarray | None = None
+    thermal_limit: float | None = None
 
     @property
     def scene(self):
@@ -95,6 +102,8 @@ class Model:
             per += 3 * fp * (k + w)
         if self.features.hysteretic:
             per += fp * (k + w)
+        if self.features.heat:
+            per += 3 * fp
         cells = self.grid.n_cells * 4 * 3
         return per * self.capacity + cells
 
@@ -124,11 +133,13 @@ def hysteretic_stiffness_ratio(e: float) -> float:
     return max(0.5 * (lo + hi), 1e-12)
 
 
-def _pair_vector(a, b, wall_friction=None) -> np.ndarray:
+def _pair_vector(a, b, wall_friction=None, heat=None) -> np.ndarray:
     """Parameters of a contact between materials a and b (indices in `contact_laws`).
 
     E* and G* combine both bodies; restitution, friction and rolling values are the mean of
     the two materials, except that a wall's or tube's own `friction` replaces both frictions.
+    With heat: harmonic-mean conductivity (a wall without one takes the particle's), and the
+    contact-radius factor (E*_sim / E*_real)^(1/3) for softened moduli (Morris et al. 2016).
     """
     p = np.zeros(cl.N_PARAMS)
     e_star = 1.0 / ((1 - a.poisson_ratio**2) / a.youngs_modulus + (1 - b.poisson_ratio**2) / b.youngs_modulus)
@@ -153,6 +164,16 @@ def _pair_vector(a, b, wall_friction=None) -> np.ndarray:
     p[cl.UNLOAD_RATIO] = 1.0 / hysteretic_stiffness_ratio(e)
     p[cl.E_I] = a.youngs_modulus
     p[cl.E_J] = b.youngs_modulus
+    if heat is not None:
+        k_a = a.conductivity or 0.0
+        k_b = b.conductivity or k_a
+        p[cl.K_EFF] = 2 * k_a * k_b / (k_a + k_b) if k_a + k_b > 0 else 0.0
+        real_a = a.real_youngs_modulus or a.youngs_modulus
+        real_b = b.real_youngs_modulus or b.youngs_modulus
+        e_real = 1.0 / ((1 - a.poisson_ratio**2) / real_a + (1 - b.poisson_ratio**2) / real_b)
+        p[cl.A_CORR] = (e_star / e_real) ** (1.0 / 3.0)
+        p[cl.LAMBDA_GAS] = heat.gas_conductivity
+        p[cl.GAP] = heat.gas_mean_free_path + heat.roughness
     return p
 
 
@@ -171,24 +192,40 @@ def _surfaces(scene, default_mat: str):
         if side == "z-" and scene.outlet is not None and scene.outlet.type == "moving_plate":
             continue  # the plate is the floor
         planes.append(dict(name=f"box {side}", p0=p0, n=n, vel=[0.0] * 3, t=(0.0, NEVER),
-                           material=dom.wall_material or default_mat, friction=dom.wall_friction))
+                           material=dom.wall_material or default_mat, friction=dom.wall_friction,
+                           T=dom.wall_temperature))
     for i, w in enumerate(scene.walls):
         n = np.asarray(w.normal, float)
         planes.append(dict(name=f"walls[{i}]", p0=list(w.point), n=list(n / np.linalg.norm(n)), vel=list(w.velocity),
-                           t=(0.0, NEVER), material=w.material or default_mat, friction=w.friction))
+                           t=(0.0, NEVER), material=w.material or default_mat, friction=w.friction, T=w.temperature))
     if scene.outlet is not None and scene.outlet.type == "moving_plate":
         o = scene.outlet
         h = dom.min[2] if o.height is None else o.height
         stop = dom.min[2] if o.stop_height is None else o.stop_height
         t1 = o.start + max(h - stop, 0.0) / o.speed
         planes.append(dict(name="outlet plate", p0=[0.0, 0.0, h], n=[0.0, 0.0, 1.0], vel=[0.0, 0.0, -o.speed],
-                           t=(o.start, t1), material=o.material or default_mat, friction=o.friction))
+                           t=(o.start, t1), material=o.material or default_mat, friction=o.friction, T=None))
     tubes = []
     for i, t in enumerate(scene.tubes):
         mask = [0.0 if AXES[a] == t.axis else 1.0 for a in range(3)]
         tubes.append(dict(name=f"tubes[{i}]", c=list(t.center), mask=mask, r=0.5 * t.diameter,
-                          material=t.material or default_mat, friction=t.friction))
+                          material=t.material or default_mat, friction=t.friction, T=t.temperature))
     return planes, tubes
+
+
+def _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors) -> float:
+    """Stability limit of the explicit temperature update: min over particles of m c / H_sum,
+    with H_sum the conductance of a full row of contacts at the largest allowed overlap
+    (contact spot 2 k a, a = sqrt(R* delta)) plus one wall contact (alpha_WP pi d^2 / 4)."""
+    from tidem.kernels.heat import schluender_alpha_wp
+
+    h = scene.heat
+    delta = scene.numerics.max_overlap * radius
+    k = np.array([mats[m].conductivity or 0.0 for m in mat_names])[material]
+    a = np.sqrt(0.5 * radius * delta)
+    wall = schluender_alpha_wp(h.gas_conductivity, 2 * radius, h.gas_mean_free_path + h.roughness) * np.pi * radius**2
+    conductance = min(max_neighbors, 12) * 2 * k * a + wall + 2 * k * np.sqrt(radius * delta)
+    return float(np.min(heat_cap / np.maximum(conductance, 1e-300)))
 
 
 def spatial_key(x: np.ndarray, lo, cell: float) -> np.ndarray:
@@ -220,6 +257,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     lengths = [dom.max[a] - dom.min[a] for a in range(3)]
 
     radius, material, group, x0, v0, active0, pours = [], [], [], [], [], [], []
+    fixed, temp0 = [], []
     errors: list[str] = []
     offset = 0
     for gi, g in enumerate(scene.particles):
@@ -271,6 +309,9 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         radius.append(0.5 * d)
         material.append(np.full(count, mat_names.index(g.material), np.int32))
         group.append(np.full(count, gi, np.int32))
+        fixed.append(np.full(count, g.fixed))
+        if scene.heat is not None:
+            temp0.append(np.full(count, g.temperature or scene.heat.initial_temperature))
         x0.append(pos)
         v0.append(vel)
         active0.append(act)
@@ -280,6 +321,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
 
     radius = np.concatenate(radius)
     material = np.concatenate(material)
+    fixed = np.concatenate(fixed)
     density = np.array([mats[m].density for m in mat_names])[material]
     mass = density * 4.0 / 3.0 * math.pi * radius**3
 
@@ -288,12 +330,12 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     pair = np.zeros((P, P, cl.N_PARAMS))
     for a, na in enumerate(mat_names):
         for b, nb in enumerate(mat_names):
-            pair[a, b] = _pair_vector(mats[na], mats[nb])
+            pair[a, b] = _pair_vector(mats[na], mats[nb], heat=scene.heat)
     surfaces = planes + tubes
     surf = np.zeros((P, max(len(surfaces), 1), cl.N_PARAMS))
     for a, na in enumerate(mat_names):
         for s, sd in enumerate(surfaces):
-            surf[a, s] = _pair_vector(mats[na], mats[sd["material"]], sd["friction"])
+            surf[a, s] = _pair_vector(mats[na], mats[sd["material"]], sd["friction"], scene.heat)
             surf[a, s, cl.E_J] = 0.0  # a wall is a body of infinite size for the linear laws
 
     # time step from the stiffest, lightest contact
@@ -348,7 +390,19 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         recycle=scene.outlet is not None and scene.outlet.type == "recycle",
         contact_time="contact_time" in scene.observables,
         precision=num.precision,
+        heat=scene.heat is not None,
     )
+    heat_cap = temperature0 = thermal_limit = None
+    if scene.heat is not None:
+        c = np.array([mats[m].heat_capacity or 0.0 for m in mat_names])[material]
+        heat_cap = mass * c
+        temperature0 = np.concatenate(temp0)
+        thermal_limit = _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, k)
+        if dt > thermal_limit:
+            raise SceneError(src, [
+                f"heat: the time step {dt:.3g} s exceeds the explicit conduction limit {thermal_limit:.3g} s "
+                "(min over particles of m c / sum of contact conductances); raise materials.*.heat_capacity, "
+                "lower materials.*.conductivity, or lower the time step"])
     end = t_end if t_end is not None else num.t_end
     if smoke:
         end = min(end, scene.output.smoke_steps * dt)
@@ -357,5 +411,6 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         material=material, group=np.concatenate(group), x0=np.concatenate(x0), v0=np.concatenate(v0),
         active0=np.concatenate(active0), pair_params=pair, surface_params=surf, planes=planes, tubes=tubes,
         pours=pours, dt=dt, scales=scales, skin=skin, max_neighbors=k, wall_slots=num.max_wall_contacts,
-        t_end=end, gravity=tuple(dom.gravity),
+        t_end=end, gravity=tuple(dom.gravity), fixed=fixed, temperature0=temperature0, heat_capacity=heat_cap,
+        thermal_limit=thermal_limit,
     )

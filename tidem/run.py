@@ -48,7 +48,8 @@ class Output:
         active = S.active.to_numpy().astype(bool)
         idx = np.flatnonzero(active)
         name = f"snap_{len(self.entries):05d}.vtp"
-        write_vtp(self.snap_dir / name, S.x.to_numpy()[idx], {
+        extra = {"temperature": S.T.to_numpy()[idx]} if self.model.features.heat else {}
+        write_vtp(self.snap_dir / name, S.x.to_numpy()[idx], {**extra,
             "radius": S.radius.to_numpy()[idx],
             "velocity": S.v.to_numpy()[idx],
             "omega": S.w.to_numpy()[idx],
@@ -63,6 +64,8 @@ class Output:
         row = {"time_s": solver.t, "step": solver.steps}
         row.update(solver.energies())
         row["max_overlap_ratio"] = float(solver.state.ovl.to_numpy().max()) if solver.n else 0.0
+        if self.model.features.heat:
+            row.update(solver.heat_summary())
         for p in self.model.planes:
             if p["name"] == "outlet plate":
                 t0, t1 = p["t"]
@@ -101,7 +104,7 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
         "particle_steps_per_s": n * steps / wall if wall > 0 else 0.0,
         "precision": f.precision,
         "scene_echo": model.loaded.raw,
-        "render": model.scene.render.model_dump(exclude_none=True),
+        "render": {"field": "temperature" if f.heat else "speed", **model.scene.render.model_dump(exclude_none=True)},
         "render_geometry": {
             "bounds": [v for a in range(3) for v in (model.scene.domain.min[a], model.scene.domain.max[a])],
             "periodic": list(model.grid.periodic),

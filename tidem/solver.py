@@ -39,8 +39,9 @@ class Solver:
         self.rebuilds = 0
         self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin, f.rolling, f.hysteretic, S)
         self._forces = make_force_kernel(model.grid, f.law, f.rolling, f.n_planes, f.n_tubes, model.wall_slots,
-                                         model.gravity, S, f.contact_time, model.pair_params.shape[0] == 1)
-        self._kick_drift, self._kick = make_integrators(model.grid, S)
+                                         model.gravity, S, f.contact_time, model.pair_params.shape[0] == 1,
+                                         f.heat)
+        self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes)
         self._energies = make_energy_kernel(model.gravity, S)
         self._recycle = None
         if f.recycle:
@@ -111,6 +112,22 @@ class Solver:
         e_kin, e_rot, e_pot, contacts, active = (float(v) for v in self.state.sums.to_numpy())
         return dict(kinetic_energy_J=e_kin, rotational_energy_J=e_rot, potential_energy_J=e_pot,
                     coordination=contacts / max(active, 1.0), particles=int(active))
+
+    def heat_summary(self) -> dict:
+        """Mean/min/max particle temperature [K] and heat flow [W] and heat [J] per heated surface."""
+        S = self.state
+        active = S.active.to_numpy().astype(bool)
+        T = S.T.to_numpy()[active]
+        out = {}
+        if len(T):
+            out.update(T_mean_K=float(T.mean()), T_min_K=float(T.min()), T_max_K=float(T.max()))
+        rate, energy = S.surf_rate.to_numpy(), S.surf_energy.to_numpy()
+        for s, surf in enumerate(self.model.planes + self.model.tubes):
+            if surf["T"] is not None:
+                key = surf["name"].replace(" ", "_").replace("[", "").replace("]", "")
+                out[f"{key}_heat_W"] = float(rate[s])
+                out[f"{key}_heat_J"] = float(energy[s])
+        return out
 
     def release(self) -> None:
         self.state.release()

@@ -13,6 +13,9 @@ Per-particle fields, shape [capacity]:
   ncontact         number of contacts
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
+With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
+surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
+into the bed [W]) and surf_energy (its time integral [J]).
 Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax;
 wmask [capacity]: bit s set while surface s holds one of the particle's slots.
 """
@@ -92,19 +95,32 @@ def allocate(model: Model) -> State:
     place((NT,), "tube_r")
     S.max_disp = ti.field(fp)
     fb.place(S.max_disp)
+    if feat.heat:
+        for name in ("T", "q", "inv_heat_cap"):
+            place((N,), name)
+        NS = max(len(model.planes) + len(model.tubes), 1)
+        place((NS,), "surf_T")
+        place((NS,), "surf_rate")
+        place((NS,), "surf_energy", ti.f64)
     place((2,), "overflow", ti.i32)
     place((5,), "sums")
     S._tree = fb.finalize()
 
     radius = model.radius
     inertia = 0.4 * model.mass * radius**2
+    movable = ~model.fixed  # fixed particles: zero inverse mass and inertia, zero velocity
     S.x.from_numpy(model.x0)
     S.x_build.from_numpy(model.x0)
-    S.v.from_numpy(model.v0)
+    S.v.from_numpy(model.v0 * movable[:, None])
     S.radius.from_numpy(radius)
     S.mass.from_numpy(model.mass)
-    S.inv_mass.from_numpy(1.0 / model.mass)
-    S.inv_inertia.from_numpy(1.0 / inertia)
+    S.inv_mass.from_numpy(movable / model.mass)
+    S.inv_inertia.from_numpy(movable / inertia)
+    if feat.heat:
+        S.T.from_numpy(model.temperature0)
+        S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
+        temps = [p["T"] for p in model.planes] + [t["T"] for t in model.tubes]
+        S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
     S.mat.from_numpy(model.material)
     S.active.from_numpy(model.active0.astype(np.int32))
     S.wid.fill(-1)

@@ -24,6 +24,27 @@ def max_diameter(scene: Scene) -> float:
     return max(largest_diameter(g.diameter) for g in scene.particles)
 
 
+def heat_checks(scene: Scene) -> list[str]:
+    """Temperatures need a [heat] table; heat needs conductivity and heat capacity of particles."""
+    errs: list[str] = []
+    temps = [("domain.wall_temperature", scene.domain.wall_temperature)]
+    temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
+    temps += [(f"walls[{i}].temperature", w.temperature) for i, w in enumerate(scene.walls)]
+    temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
+    if scene.heat is None:
+        errs += [f"{key}: temperatures need a [heat] table (add '[heat]' to switch heat transfer on)"
+                 for key, value in temps if value is not None]
+        return errs
+    for name in sorted({g.material for g in scene.particles}):
+        m = scene.materials.get(name)
+        if m is None:
+            continue
+        for key in ("conductivity", "heat_capacity"):
+            if getattr(m, key) is None:
+                errs.append(f"materials.{name}.{key}: required with [heat] (particles of this material carry heat)")
+    return errs
+
+
 def cross_checks(scene: Scene) -> list[str]:
     """All problems that a single table cannot see, as 'key.path: message' lines."""
     errs: list[str] = []
@@ -103,6 +124,8 @@ def cross_checks(scene: Scene) -> list[str]:
     n_surfaces = len(sides) + len(scene.walls) + len(scene.tubes) + plate
     if n_surfaces > 31:
         errs.append(f"walls and tubes: {n_surfaces} surfaces in all, at most 31 are supported; merge or drop some")
+
+    errs += heat_checks(scene)
 
     dmax = max_diameter(scene)
     cell = dmax * (1.0 + scene.numerics.skin)

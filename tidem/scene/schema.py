@@ -25,6 +25,7 @@ class Domain(Box):
     walls: Literal["auto", "none"] | list[Side] = "auto"
     wall_material: str | None = None
     wall_friction: NonNegative | None = None
+    wall_temperature: Positive | None = None
     gravity: Vec3 = (0.0, 0.0, -9.81)
 
     def wall_sides(self) -> list[str]:
@@ -47,6 +48,9 @@ class Material(Strict):
     dynamic_friction: NonNegative | None = None
     rolling_friction: NonNegative = 0.0
     rolling_damping: NonNegative = Field(default=0.3, le=1.0)
+    conductivity: Positive | None = None
+    heat_capacity: Positive | None = None
+    real_youngs_modulus: Positive | None = None
 
     @model_validator(mode="after")
     def _dynamic_below_static(self):
@@ -108,6 +112,8 @@ class ParticleGroup(Strict):
     pour: Pour | None = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
     velocities: list[Vec3] | None = None
+    temperature: Positive | None = None
+    fixed: bool = False
     seed: int = 0
 
     @model_validator(mode="before")
@@ -141,6 +147,7 @@ class Wall(Strict):
     material: str | None = None
     friction: NonNegative | None = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
+    temperature: Positive | None = None
 
     @model_validator(mode="after")
     def _unit(self):
@@ -157,6 +164,7 @@ class Tube(Strict):
     diameter: Positive
     material: str | None = None
     friction: NonNegative | None = None
+    temperature: Positive | None = None
 
 
 class Outlet(Strict):
@@ -211,6 +219,15 @@ class Output(Strict):
     smoke_steps: int = Field(default=300, ge=1)
 
 
+class Heat(Strict):
+    """Particle temperatures and conduction (only built when the scene has this table)."""
+
+    initial_temperature: Positive = 293.15
+    gas_conductivity: Positive = 0.026
+    gas_mean_free_path: NonNegative = 6.8e-8
+    roughness: NonNegative = 1e-6
+
+
 class Render(Strict):
     """Frames and movie of a run (`tidem render` can redo them with other settings)."""
 
@@ -246,4 +263,5 @@ class Scene(Strict):
     numerics: Numerics = Numerics()
     output: Output = Output()
     render: Render = Render()
+    heat: Heat | None = None
     observables: list[Literal["contact_time"]] = []

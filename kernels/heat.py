@@ -1,0 +1,43 @@
+"""Heat conduction between particles and to walls and tubes (evaluated in the contact loop).
+
+* Through the contact spot (Batchelor & O'Brien 1977): H = 2 k a, k the harmonic mean of
+  the two solid conductivities and a the contact radius. a = sqrt(R* delta) is the
+  geometric radius of the overlap; a softened Young's modulus makes contacts too large, so
+  a is scaled by (E*_sim / E*_real)^(1/3) (Hertz: a ~ E*^(-1/3) at equal force; Morris et
+  al. 2016) when a material gives `real_youngs_modulus`.
+* Particle to wall or tube (Schluender; source 3 eq. 20), through the gas near the contact:
+      alpha_WP = (4 lambda_g / d) { [1 + 2 (l + h_R)/d] ln[1 + d / (2 (l + h_R))] - 1 },
+  lambda_g the gas conductivity, l the gas mean free path, h_R the roughness; a touching
+  particle exchanges H = alpha_WP pi d^2 / 4 (its share of the wall at full coverage) in
+  addition to the solid contact spot 2 k a.
+The heat rate into particle i is q_i = sum_j H_ij (T_j - T_i) + sum_walls H_iw (T_w - T_i);
+a pair's H is computed identically from both sides, so the pair terms cancel exactly and
+an isolated bed keeps its heat to rounding.
+"""
+
+import numpy as np
+import taichi as ti
+
+from .contact_laws import A_CORR, GAP, K_EFF, LAMBDA_GAS
+
+
+def schluender_alpha_wp(lambda_gas, d, gap):
+    """alpha_WP [W/(m^2 K)] of source 3 eq. 20 (numpy; gap = mean free path + roughness)."""
+    d = np.asarray(d, dtype=float)
+    x = 2.0 * gap / d
+    return 4.0 * lambda_gas / d * ((1.0 + x) * np.log(1.0 + 1.0 / x) - 1.0)
+
+
+@ti.func
+def spot_conductance(p, r_eff, delta):
+    """2 k a with a = sqrt(R* delta) (E*-corrected) [W/K]."""
+    return 2.0 * p[K_EFF] * p[A_CORR] * ti.sqrt(r_eff * delta)
+
+
+@ti.func
+def wall_conductance(p, r, delta):
+    """Contact spot plus Schluender's gas-gap coefficient over pi d^2 / 4 [W/K]."""
+    d = 2.0 * r
+    x = 2.0 * p[GAP] / d
+    alpha = 4.0 * p[LAMBDA_GAS] / d * ((1.0 + x) * ti.log(1.0 + 1.0 / x) - 1.0)
+    return spot_conductance(p, r, delta) + alpha * 3.141592653589793 * r * r

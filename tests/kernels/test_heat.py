@@ -1,0 +1,126 @@
+"""Heat conduction against the two-body lumped solution, conservation, the surface balance
+and a hand calculation of Schluender's wall coefficient."""
+
+import math
+
+import numpy as np
+import pytest
+
+from tests.conftest import make_scene
+from tidem.kernels.heat import schluender_alpha_wp
+
+STEEL = {"density": 7800.0, "youngs_modulus": 2e9, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.3,
+         "conductivity": 16.0, "heat_capacity": 500.0}
+R = 0.005
+
+
+def test_alpha_wp_hand_calculation():
+    # lambda = 0.026 W/(m K), d = 1 mm, l + h_R = 1.068 um:
+    # x = 2 * 1.068e-6 / 1e-3 = 2.136e-3; 4 lambda / d = 104;
+    # (1 + x) ln(1 + 1/x) - 1 = 1.002136 * ln(469.16) - 1 = 5.1644  ->  537.1 W/(m^2 K)
+    assert schluender_alpha_wp(0.026, 1e-3, 1.068e-6) == pytest.approx(537.1, rel=1e-3)
+
+
+def test_two_fixed_spheres_relax_as_the_lumped_solution(solver_for):
+    overlap = 1e-5
+    raw = make_scene(
+        materials={"steel": STEEL},
+        particles=[{"name": "hot", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[-R + overlap / 2, 0, 0]], "temperature": 423.15, "fixed": True},
+                   {"name": "cold", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[R - overlap / 2, 0, 0]], "temperature": 293.15, "fixed": True}],
+        heat={},
+        numerics={"dt": 0.1, "force_dt": True},
+    )
+    s = solver_for(raw)
+    m = 7800 * 4 / 3 * math.pi * R**3
+    h = 2 * 16.0 * math.sqrt(R / 2 * overlap)  # Batchelor & O'Brien, a = sqrt(R* delta)
+    rate = h * 2 / (m * 500.0)
+    for _ in range(2000):
+        s.step()
+    T = s.state.T.to_numpy()
+    expected = 130.0 * math.exp(-rate * s.t)
+    assert s.t * rate > 0.5, "the test covers a good part of the relaxation"
+    assert T[0] - T[1] == pytest.approx(expected, rel=0.01)
+    assert T.mean() == pytest.approx(358.15, rel=1e-12)
+    assert np.allclose(s.state.x.to_numpy()[:, 0], [-R + overlap / 2, R - overlap / 2])
+
+
+def test_isolated_bed_keeps_its_heat(solver_for):
+    rng = np.random.default_rng(1)
+    g = (np.arange(4) - 1.5) * 0.00995  # slightly overlapping: long contacts
+    pos = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    raw = make_scene(
+        domain={"min": [-0.03, -0.03, -0.03], "max": [0.03, 0.03, 0.03], "gravity": [0, 0, -9.81],
+                "walls": ["x-", "x+", "y-", "y+", "z-", "z+"]},
+        materials={"steel": {**STEEL, "heat_capacity": 0.05}},  # thermal time ~ 0.02 s: heat moves
+        particles=[{"name": "bed", "material": "steel", "diameter": {"distribution": "mono", "value": 0.01},
+                    "positions": pos.tolist(), "velocities": rng.normal(0, 0.05, pos.shape).tolist()}],
+        heat={},
+    )
+    s = solver_for(raw)
+    s.state.T.from_numpy(rng.uniform(300, 900, len(pos)))
+    c = 7800 * 4 / 3 * math.pi * 0.005**3 * 0.05
+    q0 = c * s.state.T.to_numpy().sum()
+    spread0 = s.state.T.to_numpy().std()
+    touched = 0
+    for _ in range(10000):
+        s.step()
+        touched = max(touched, int(s.state.ncontact.to_numpy().sum()))
+    assert touched > 10
+    assert c * s.state.T.to_numpy().sum() == pytest.approx(q0, rel=1e-6)
+    assert s.state.T.to_numpy().std() < 0.95 * spread0, "heat was exchanged"
+
+
+def test_heat_from_a_hot_tube_equals_heat_gained_by_the_bed(solver_for):
+    raw = make_scene(
+        domain={"min": [0, 0, 0], "max": [0.06, 0.012, 0.08], "periodic": ["x"], "gravity": [0, 0, -9.81],
+                "walls": ["y-", "y+", "z-"]},
+        materials={"steel": STEEL},
+        tubes=[{"center": [0.03, 0, 0.025], "axis": "y", "diameter": 0.02, "temperature": 500.0}],
+        particles=[{"name": "bed", "material": "steel", "diameter": {"distribution": "mono", "value": 0.004},
+                    "region": {"min": [0, 0, 0], "max": [0.06, 0.012, 0.06]}, "temperature": 300.0}],
+        heat={},
+    )
+    s = solver_for(raw)
+    c = 7800 * 4 / 3 * math.pi * 0.002**3 * 500.0
+    e0 = c * s.state.T.to_numpy().sum()
+    while s.t < 0.1:
+        s.step()
+    gained = c * s.state.T.to_numpy().sum() - e0
+    delivered = s.heat_summary()["tubes0_heat_J"]
+    assert gained > 1e-3
+    assert delivered == pytest.approx(gained, rel=0.01)
+
+
+def test_wall_contact_conductance_matches_the_formula(solver_for):
+    overlap = 1e-5
+    raw = make_scene(
+        domain={"min": [-0.1, -0.1, -0.1], "max": [0.1, 0.1, 0.1], "walls": ["z-"], "wall_temperature": 400.0,
+                "gravity": [0, 0, 0]},
+        materials={"steel": STEEL},
+        particles=[{"name": "p", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[0, 0, -0.1 + R - overlap]], "temperature": 300.0, "fixed": True}],
+        heat={"gas_conductivity": 0.03, "gas_mean_free_path": 7e-8, "roughness": 2e-6},
+        numerics={"dt": 1e-4, "force_dt": True},
+    )
+    s = solver_for(raw)
+    h = 2 * 16.0 * math.sqrt(R * overlap) + schluender_alpha_wp(0.03, 2 * R, 2.07e-6) * math.pi * R**2
+    assert s.state.q.to_numpy()[0] == pytest.approx(h * 100.0, rel=1e-9)
+
+
+def test_unstable_thermal_step_is_refused():
+    from tidem.model import build_model
+    from tidem.scene.errors import SceneError
+    from tidem.scene.load import validate
+
+    raw = make_scene(materials={"steel": {**STEEL, "heat_capacity": 1e-9}}, heat={})
+    with pytest.raises(SceneError, match="explicit conduction limit"):
+        build_model(validate(raw))
+
+
+def test_no_heat_table_builds_no_thermal_state(solver_for):
+    s = solver_for(make_scene())
+    assert not hasattr(s.state, "T")
+    assert not s.model.features.heat
+    assert "heat" not in " ".join(s.model.features.kernels())
