@@ -22,10 +22,13 @@ from .heat import spot_conductance, wall_conductance
 
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
-                      track_contact_time: bool = False, single_material: bool = False, heat: bool = False):
+                      track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
+                      angle_bins: int = 0):
     """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
-    the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0)."""
+    the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
+    with `angle_bins` the heat flow from each tube by angle omega of the contact point from the
+    top of the tube, tube_bin_rate[k, b] (omega = atan2(side, up), 0 = top, 180 deg = bottom)."""
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
@@ -66,6 +69,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         if ti.static(heat):
             for s in range(n_surf):
                 S.surf_rate[s] = 0.0
+        if ti.static(angle_bins > 0):
+            for k, b in S.tube_bin_rate:
+                S.tube_bin_rate[k, b] = 0.0
         for i in range(n):
             if S.active[i]:
                 xi = S.x[i]
@@ -169,6 +175,14 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                                     flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (S.surf_T[s] - S.T[i])
                                     heat_in += flow
                                     ti.atomic_add(S.surf_rate[s], flow)
+                                    if ti.static(angle_bins > 0 and s >= n_planes):
+                                        off = -nrm
+                                        omega = ti.atan2(off.dot(S.tube_side[s - n_planes]), off[2])
+                                        if omega < 0.0:
+                                            omega += 2.0 * 3.141592653589793
+                                        b = ti.min(ti.cast(omega / (2.0 * 3.141592653589793) * angle_bins, ti.i32),
+                                                   angle_bins - 1)
+                                        ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
                             if ti.static(rolling):
                                 S.wmr[i, slot] = mr_new
                             if ti.static(hysteretic):

@@ -13,7 +13,7 @@ import taichi as ti
 from .geometry import make_geometry
 
 
-def make_integrators(grid, S, heat: bool = False, n_surf: int = 0):
+def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0):
     """Return (kick_drift(n, dt), kick(n, dt)); with heat, `kick` also advances temperatures
     explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s."""
     min_image, wrap, _cc, _cid = make_geometry(grid)
@@ -34,6 +34,9 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0):
         if ti.static(heat):
             for s in range(n_surf):
                 S.surf_energy[s] += dt * S.surf_rate[s]
+        if ti.static(angle_bins > 0):
+            for k, b in S.tube_bin_rate:
+                S.tube_bin_energy[k, b] += dt * S.tube_bin_rate[k, b]
         for i in range(n):
             if S.active[i]:
                 S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]

@@ -86,6 +86,7 @@ class Model:
     temperature0: np.ndarray | None = None
     heat_capacity: np.ndarray | None = None
     thermal_limit: float | None = None
+    angle_bins: int = 0
 
     @property
     def scene(self):
@@ -413,4 +414,5 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         pours=pours, dt=dt, scales=scales, skin=skin, max_neighbors=k, wall_slots=num.max_wall_contacts,
         t_end=end, gravity=tuple(dom.gravity), fixed=fixed, temperature0=temperature0, heat_capacity=heat_cap,
         thermal_limit=thermal_limit,
+        angle_bins=scene.heat.angle_bins if scene.heat is not None and any(t["T"] for t in tubes) else 0,
     )

@@ -37,3 +37,31 @@ def contact_times(model, solver) -> list[dict]:
                 row["hertz_contact_time_s"] = hertz_contact_time(m_eff, r_eff, e_star, speed)
         rows.append(row)
     return rows
+
+
+def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
+    """Local heat-transfer coefficient around each heated tube (source 3 eq. 34-36, ring
+    sectors): alpha(omega) = q(omega) / (T_wall - T_ref), q the time-averaged heat flux
+    through the sector of angle omega from the top of the tube since heat.profile_start,
+    T_ref = heat.initial_temperature (the temperature the bed enters with).
+    Returns (rows of tube, angle_deg, alpha, and the mean alpha per tube)."""
+    if not model.angle_bins or solver.profile_t0 is None or solver.t <= solver.profile_t0:
+        return [], []
+    energy = solver.state.tube_bin_energy.to_numpy()
+    span = solver.t - solver.profile_t0
+    t_ref = model.scene.heat.initial_temperature
+    rows, means = [], []
+    bins = model.angle_bins
+    for k, tube in enumerate(model.tubes):
+        if tube["T"] is None:
+            continue
+        axis = 0 if tube["mask"][0] == 0.0 else 1
+        length = model.grid.length[axis]
+        area = 2 * np.pi * tube["r"] / bins * length
+        dT = tube["T"] - t_ref
+        for b in range(bins):
+            rows.append({"tube": k, "angle_deg": (b + 0.5) * 360.0 / bins,
+                         "alpha_W_m2K": float(energy[k, b] / span / area / dT)})
+        means.append({"tube": k, "mean_alpha_W_m2K": float(energy[k].sum() / span / (area * bins) / dT),
+                      "averaged_over_s": span})
+    return rows, means

@@ -16,7 +16,7 @@ from tidem import __version__
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
-from tidem.observables import contact_times
+from tidem.observables import alpha_profile, contact_times
 from tidem.solver import RunError, Solver
 
 
@@ -72,6 +72,13 @@ class Output:
                 row["plate_z_m"] = p["p0"][2] + p["vel"][2] * (min(max(solver.t, t0), t1) - t0)
         self.series.append(row)
 
+    def write_alpha_profile(self, solver: Solver) -> None:
+        """alpha_profile.csv: tube, angle_deg (0 = top), alpha_W_m2K."""
+        rows, _ = alpha_profile(self.model, solver)
+        if rows:
+            lines = ["tube,angle_deg,alpha_W_m2K"] + [f"{r['tube']},{r['angle_deg']:.2f},{r['alpha_W_m2K']:.6g}" for r in rows]
+            (self.dir / "alpha_profile.csv").write_text("\n".join(lines) + "\n")
+
     def write_summary(self, data: dict) -> None:
         path = self.dir / "run.json"
         tmp = path.with_suffix(".json.tmp")
@@ -113,6 +120,8 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
     }
     if solver is not None and f.contact_time:
         out["observables"] = {"contact_time": contact_times(model, solver)}
+    if solver is not None and model.angle_bins:
+        out.setdefault("observables", {})["tube_mean_alpha"] = alpha_profile(model, solver)[1]
     return out
 
 
@@ -156,6 +165,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         status, message = "interrupted", f"interrupted at t = {solver.t:.6g} s (step {solver.steps})"
     finally:
         out.series.close()
+        if model.angle_bins:
+            out.write_alpha_profile(solver)
         wall = time.perf_counter() - t0
         data = summary(model, solver, status, wall, message)
         data["setup_s"] = setup_s

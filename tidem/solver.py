@@ -40,8 +40,10 @@ class Solver:
         self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin, f.rolling, f.hysteretic, S)
         self._forces = make_force_kernel(model.grid, f.law, f.rolling, f.n_planes, f.n_tubes, model.wall_slots,
                                          model.gravity, S, f.contact_time, model.pair_params.shape[0] == 1,
-                                         f.heat)
-        self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes)
+                                         f.heat, model.angle_bins)
+        self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
+                                                        model.angle_bins)
+        self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, S)
         self._recycle = None
         if f.recycle:
@@ -77,6 +79,9 @@ class Solver:
         self._kick(self.n, dt)
         if self.steps % self._check_every == 0:
             self.check()
+        if self.model.angle_bins and self.profile_t0 is None and self.t >= self.model.scene.heat.profile_start:
+            self.state.tube_bin_energy.fill(0.0)
+            self.profile_t0 = self.t
 
     def check(self) -> None:
         """Raise RunError on capacity overflow, NaN or an overlap above numerics.max_overlap."""

@@ -102,6 +102,10 @@ def allocate(model: Model) -> State:
         place((NS,), "surf_T")
         place((NS,), "surf_rate")
         place((NS,), "surf_energy", ti.f64)
+        if model.angle_bins:
+            place((len(model.tubes), model.angle_bins), "tube_bin_rate")
+            place((len(model.tubes), model.angle_bins), "tube_bin_energy", ti.f64)
+            place((len(model.tubes),), "tube_side", n=3)
     place((2,), "overflow", ti.i32)
     place((5,), "sums")
     S._tree = fb.finalize()
@@ -121,6 +125,9 @@ def allocate(model: Model) -> State:
         S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
         temps = [p["T"] for p in model.planes] + [t["T"] for t in model.tubes]
         S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
+        if model.angle_bins:
+            S.tube_side.from_numpy(np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0]
+                                             for t in model.tubes]))
     S.mat.from_numpy(model.material)
     S.active.from_numpy(model.active0.astype(np.int32))
     S.wid.fill(-1)

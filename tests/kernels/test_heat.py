@@ -124,3 +124,31 @@ def test_no_heat_table_builds_no_thermal_state(solver_for):
     assert not hasattr(s.state, "T")
     assert not s.model.features.heat
     assert "heat" not in " ".join(s.model.features.kernels())
+
+
+def test_tube_heat_lands_in_the_angle_bin_of_the_contact(solver_for):
+    """A fixed particle on the flank of a hot tube at omega = 80 deg from the top: all the tube's
+    heat goes through the sector [45, 90) deg, and the profile's mean equals the tube's heat flow."""
+    from tidem.observables import alpha_profile
+
+    r_t, overlap = 0.01, 1e-5
+    raw = make_scene(
+        domain={"min": [-0.05, 0.0, -0.05], "max": [0.05, 0.02, 0.05], "walls": "none", "gravity": [0, 0, 0]},
+        materials={"steel": STEEL},
+        tubes=[{"center": [0.0, 0.0, 0.0], "axis": "y", "diameter": 2 * r_t, "temperature": 400.0}],
+        particles=[{"name": "p", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[(r_t + R - overlap) * math.sin(math.radians(80)), 0.01,
+                                   (r_t + R - overlap) * math.cos(math.radians(80))]],
+                    "temperature": 300.0, "fixed": True}],
+        heat={"initial_temperature": 300.0, "angle_bins": 8},
+        numerics={"dt": 1e-3, "force_dt": True},
+    )
+    s = solver_for(raw)
+    for _ in range(10):
+        s.step()
+    rows, means = alpha_profile(s.model, s)
+    hot = [r for r in rows if r["alpha_W_m2K"] > 0]
+    assert [r["angle_deg"] for r in hot] == [67.5]
+    area = 2 * math.pi * r_t * 0.02
+    flow = s.heat_summary()["tubes0_heat_W"]
+    assert means[0]["mean_alpha_W_m2K"] == pytest.approx(flow / area / 100.0, rel=1e-3)

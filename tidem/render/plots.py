@@ -71,4 +71,21 @@ def plot_timeseries(run_dir: Path) -> list[Path]:
     written.append(out_dir / "timeseries.png")
     fig.savefig(written[-1], dpi=110)
     plt.close(fig)
+
+    profile = Path(run_dir) / "alpha_profile.csv"
+    if profile.exists():
+        prof = read_series(profile)
+        fig, ax = plt.subplots(figsize=(7, 4))
+        for k in np.unique(prof["tube"]):
+            sel = prof["tube"] == k
+            ax.plot(prof["angle_deg"][sel], prof["alpha_W_m2K"][sel], "o-", ms=3, label=f"tube {int(k)}")
+        ax.set_xlabel("Angle from the top of the tube [deg]")
+        ax.set_ylabel("alpha [W/(m$^2$ K)]")
+        ax.set_xticks(range(0, 361, 45))
+        ax.grid(alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        written.append(out_dir / "alpha_profile.png")
+        fig.savefig(written[-1], dpi=110)
+        plt.close(fig)
     return written

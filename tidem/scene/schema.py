@@ -226,6 +226,8 @@ class Heat(Strict):
     gas_conductivity: Positive = 0.026
     gas_mean_free_path: NonNegative = 6.8e-8
     roughness: NonNegative = 1e-6
+    angle_bins: int = Field(default=36, ge=4, le=720)
+    profile_start: NonNegative = 0.0
 
 
 class Render(Strict):
