@@ -7,6 +7,7 @@ Ctrl-C exits with 130 after the same.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -96,7 +97,11 @@ def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_th
     except RenderUnavailable as exc:
         typer.echo(f"tidem: not rendering: {exc}", err=True)
         return
-    from tidem.render.movie import render_run, style_for
+    from tidem.render.movie import render_run, snapshots, style_for
+
+    if not snapshots(run_dir):
+        typer.echo(f"tidem: nothing to render: {run_dir} has no snapshots", err=True)
+        return
 
     try:
         style = style_for(run_dir, field, clim, view, slice_thickness)
@@ -105,7 +110,7 @@ def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_th
     settings = json.loads((run_dir / "run.json").read_text()).get("render", {})
 
     def report(k, n):
-        if not quiet:
+        if not quiet and (k == n or sys.stderr.isatty()):
             typer.echo(f"\rrendering frame {k}/{n}", nl=k == n, err=True)
 
     movie = render_run(run_dir, style, name, fps=settings.get("fps", 15),
@@ -142,6 +147,10 @@ def render(
         clim = (lo, hi)
     if view is not None and view not in ("front", "side", "top", "iso"):
         _fail(f"--view {view}: choose front, side, top or iso", 2)
+    from tidem.render.movie import snapshots
+
+    if not snapshots(run_dir):
+        _fail(f"{run_dir}: the snapshot collection is empty; nothing to render", 2)
     name = json.loads((run_dir / "run.json").read_text()).get("scene", run_dir.name)
     _render(run_dir, name, field, clim, view, slice_, gif or None)
 

@@ -69,6 +69,36 @@ def test_scene_run_writes_frames_and_movie(tmp_path):
     assert json.loads((out / "run.json").read_text())["status"] == "finished"
 
 
+def test_hot_and_cold_particles_take_the_two_ends_of_the_temperature_map(tmp_path):
+    import imageio.v2 as imageio
+
+    snap = tmp_path / "t.vtp"
+    write_vtp(snap, np.array([[0.05, 0.01, 0.05], [0.15, 0.01, 0.05]]),
+              {"radius": np.array([0.02, 0.02]), "velocity": np.zeros((2, 3)), "temperature": np.array([300.0, 900.0])})
+    style = FrameStyle(field="temperature", clim=(300.0, 900.0), colormap="inferno",
+                       size=frame_size("front", BOUNDS), view="front", bounds=BOUNDS, tubes=[])
+    render_frame(snap, 0.0, style, tmp_path / "t.png")
+    img = imageio.imread(tmp_path / "t.png")[:, :, :3].astype(float)
+    write_vtp(snap, np.array([[0.15, 0.01, 0.05]]),
+              {"radius": np.array([0.02]), "velocity": np.zeros((1, 3)), "temperature": np.array([900.0])})
+    render_frame(snap, 0.0, style, tmp_path / "hot_only.png")
+    ref = imageio.imread(tmp_path / "hot_only.png")[:, :, :3].astype(float)
+    plot_w = int(0.8 * img.shape[1])
+
+    def dark(a):
+        return int((a[:, : plot_w // 2].sum(axis=2) < 150).sum())
+
+    # inferno: the cold end is near black, the hot end pale yellow
+    assert dark(img) - dark(ref) > 500, "the cold particle adds near-black pixels"
+    hot = img[:, plot_w // 2: plot_w].reshape(-1, 3)
+    hot = hot[(hot[:, 0] > 200) & (hot[:, 1] > 150) & (hot[:, 2] < 200)]
+    assert len(hot) > 500, "yellow pixels of the hot particle"
+
+
 def test_render_refuses_bad_options(tmp_path):
     result = CliRunner().invoke(app, ["render", str(tmp_path)])
     assert result.exit_code == 2 and "not a run folder" in result.output
+    (tmp_path / "run.json").write_text("{}")
+    (tmp_path / "snapshots.pvd").write_text('<?xml version="1.0"?><VTKFile type="Collection"><Collection/></VTKFile>')
+    result = CliRunner().invoke(app, ["render", str(tmp_path)])
+    assert result.exit_code == 2 and "empty" in result.output
