@@ -35,6 +35,7 @@ class Features:
     contact_time: bool
     precision: str
     heat: bool = False
+    gas: bool = False
 
     def kernels(self) -> list[str]:
         law = {cl.LINEAR: "linear", cl.HERTZ: "hertz_mindlin", cl.HYSTERETIC: "hysteretic"}[self.law]
@@ -51,6 +52,8 @@ class Features:
             out.append("contact-time observer")
         if self.heat:
             out.append("heat (contact-spot conduction, wall/tube conduction after Schluender)")
+        if self.gas:
+            out.append("gas (voidage, drag, pressure projection" + (", gas energy)" if self.heat else ")"))
         return out
 
 
@@ -105,6 +108,8 @@ class Model:
             per += fp * (k + w)
         if self.features.heat:
             per += 3 * fp
+        if self.features.gas:
+            per += fp * (8 + (2 if self.features.heat else 0))
         cells = self.grid.n_cells * 4 * 3
         return per * self.capacity + cells
 
@@ -392,6 +397,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         contact_time="contact_time" in scene.observables,
         precision=num.precision,
         heat=scene.heat is not None,
+        gas=scene.gas is not None,
     )
     heat_cap = temperature0 = thermal_limit = None
     if scene.heat is not None:

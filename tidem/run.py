@@ -66,6 +66,8 @@ class Output:
         row["max_overlap_ratio"] = float(solver.state.ovl.to_numpy().max()) if solver.n else 0.0
         if self.model.features.heat:
             row.update(solver.heat_summary())
+        if solver.gas is not None:
+            row.update(solver.gas.summary())
         for p in self.model.planes:
             if p["name"] == "outlet plate":
                 t0, t1 = p["t"]

@@ -2,19 +2,22 @@
 
 `step()` is a short list of kernel launches and makes no physics decisions: kick-drift,
 neighbour rebuild when a particle moved more than half the skin (or particles appeared),
-forces, kick. Health checks (NaN, runaway overlap, capacity overflow) run every
+a gas step every `gas.coupling_interval` steps (scenes with gas), forces (contacts, then
+drag and pressure-gradient force), kick. Health checks (NaN, runaway overlap, capacity overflow) run every
 `numerics.check_interval` steps and raise `RunError` naming the particle and the fix.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import taichi as ti
 
 from tidem.kernels.broadphase import make_neighbor_builder
 from tidem.kernels.contact import make_force_kernel
 from tidem.kernels.diagnostics import make_energy_kernel
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.outlet import make_recycle_kernel
+from tidem.gas import GasError, GasPhase
 from tidem.model import Model
 from tidem.pour import Pourer
 from tidem.state import State, allocate
@@ -50,6 +53,9 @@ class Solver:
             o = model.scene.outlet
             self._recycle = make_recycle_kernel(o.height, o.reinsert_height, model.wall_slots, S)
         self.pourer = Pourer(model, S) if model.pours else None
+        self.gas = None
+        if f.gas:
+            self.gas = GasPhase(model, S, ti.f64 if f.precision == "float64" else ti.f32)
         self._check_every = model.scene.numerics.check_interval
         self.start()
 
@@ -59,7 +65,11 @@ class Solver:
             self.pourer.insert(self.t)
         self._rebuild(self.n)
         self.rebuilds += 1
+        if self.gas is not None:
+            self._gas_step()
         self._forces(self.n, self.t, self.dt)
+        if self.gas is not None:
+            self.gas.add_forces(self.n)
         self.check()
 
     def step(self) -> None:
@@ -75,13 +85,23 @@ class Solver:
         if need:
             self._rebuild(self.n)
             self.rebuilds += 1
+        if self.gas is not None and self.steps % self.gas.interval == 0:
+            self._gas_step()
         self._forces(self.n, self.t, dt)
+        if self.gas is not None:
+            self.gas.add_forces(self.n)
         self._kick(self.n, dt)
         if self.steps % self._check_every == 0:
             self.check()
         if self.model.angle_bins and self.profile_t0 is None and self.t >= self.model.scene.heat.profile_start:
             self.state.tube_bin_energy.fill(0.0)
             self.profile_t0 = self.t
+
+    def _gas_step(self) -> None:
+        try:
+            self.gas.step(self.t)
+        except GasError as exc:
+            raise RunError(str(exc)) from None
 
     def check(self) -> None:
         """Raise RunError on capacity overflow, NaN or an overlap above numerics.max_overlap."""
@@ -135,4 +155,6 @@ class Solver:
         return out
 
     def release(self) -> None:
+        if self.gas is not None:
+            self.gas.release()
         self.state.release()

@@ -16,6 +16,9 @@ spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of t
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
 into the bed [W]) and surf_energy (its time integral [J]).
+With gas (frozen between gas steps, see kernels/gas_coupling.py): gK (drag coefficient
+[kg/s]), geps (voidage), gu (gas velocity [m/s]) and ggp (pressure gradient [Pa/m]) at the
+particle; with heat also gH (gas-particle conductance [W/K]) and gT (gas temperature [K]).
 Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax;
 wmask [capacity]: bit s set while surface s holds one of the particle's slots.
 """
@@ -106,6 +109,14 @@ def allocate(model: Model) -> State:
             place((len(model.tubes), model.angle_bins), "tube_bin_rate")
             place((len(model.tubes), model.angle_bins), "tube_bin_energy", ti.f64)
             place((len(model.tubes),), "tube_side", n=3)
+    if feat.gas:
+        for name in ("gK", "geps"):
+            place((N,), name)
+        for name in ("gu", "ggp"):
+            place((N,), name, n=3)
+        if feat.heat:
+            for name in ("gH", "gT"):
+                place((N,), name)
     place((2,), "overflow", ti.i32)
     place((5,), "sums")
     S._tree = fb.finalize()

@@ -45,6 +45,33 @@ def heat_checks(scene: Scene) -> list[str]:
     return errs
 
 
+def gas_checks(scene: Scene) -> list[str]:
+    """The gas enters at the bottom and leaves at the top; cells must hold a few particles."""
+    gas = scene.gas
+    if gas is None:
+        return []
+    errs: list[str] = []
+    dom = scene.domain
+    if "z" in dom.periodic:
+        errs.append("gas: the gas flows from the distributor (bottom) to the outlet (top); remove 'z' from domain.periodic")
+    dmax = max_diameter(scene)
+    sizes = []
+    for a in range(3):
+        length = dom.max[a] - dom.min[a]
+        sizes.append(length / max(1, round(length / gas.cell_size)))
+    if min(sizes) < 2 * dmax:
+        errs.append(f"gas.cell_size: cells of {min(sizes):g} m are smaller than 2 particle diameters ({2 * dmax:g} m), "
+                    f"so the voidage is not a local average; use cell_size >= {3 * dmax:g} (about 3 diameters)")
+    for i, nz in enumerate(gas.nozzles):
+        for key, a in (("x", 0), ("y", 1)):
+            r = getattr(nz, key)
+            if r is not None and (r[0] < dom.min[a] or r[1] > dom.max[a]):
+                errs.append(f"gas.nozzles[{i}].{key}: {list(r)} reaches outside the domain {dom.min[a]:g}..{dom.max[a]:g} m")
+    if scene.heat is None and (gas.inlet_temperature is not None or gas.initial_temperature is not None):
+        errs.append("gas: gas temperatures need a [heat] table (add '[heat]' to switch heat transfer on)")
+    return errs
+
+
 def cross_checks(scene: Scene) -> list[str]:
     """All problems that a single table cannot see, as 'key.path: message' lines."""
     errs: list[str] = []
@@ -126,6 +153,7 @@ def cross_checks(scene: Scene) -> list[str]:
         errs.append(f"walls and tubes: {n_surfaces} surfaces in all, at most 31 are supported; merge or drop some")
 
     errs += heat_checks(scene)
+    errs += gas_checks(scene)
 
     dmax = max_diameter(scene)
     cell = dmax * (1.0 + scene.numerics.skin)

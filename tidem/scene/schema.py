@@ -230,6 +230,42 @@ class Heat(Strict):
     profile_start: NonNegative = 0.0
 
 
+class Nozzle(Strict):
+    """A part of the distributor with its own superficial gas velocity."""
+
+    x: tuple[Number, Number]
+    y: tuple[Number, Number] | None = None
+    velocity: NonNegative
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        for key in ("x", "y"):
+            r = getattr(self, key)
+            if r is not None and r[1] <= r[0]:
+                raise ValueError(f"{key}: the upper end must exceed the lower ({list(r)})")
+        return self
+
+
+class Gas(Strict):
+    """The gas phase: locally averaged incompressible flow coupled to the particles."""
+
+    density: Positive = 1.2
+    viscosity: Positive = 1.8e-5
+    heat_capacity: Positive = 1005.0
+    cell_size: Positive
+    inlet_velocity: NonNegative = 0.0
+    inlet_ramp: NonNegative = 0.0
+    nozzles: list[Nozzle] = []
+    inlet_temperature: Positive | None = None
+    initial_temperature: Positive | None = None
+    drag: Literal["gidaspow", "di_felice"] = "gidaspow"
+    heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
+    coupling_interval: int = Field(default=10, ge=1)
+    tolerance: Positive = 1e-8
+    max_iterations: int = Field(default=2000, ge=1)
+    min_voidage: Number = Field(default=0.3, gt=0, lt=1)
+
+
 class Render(Strict):
     """Frames and movie of a run (`tidem render` can redo them with other settings)."""
 
@@ -266,4 +302,5 @@ class Scene(Strict):
     output: Output = Output()
     render: Render = Render()
     heat: Heat | None = None
+    gas: Gas | None = None
     observables: list[Literal["contact_time"]] = []

@@ -1,0 +1,77 @@
+"""Gas-particle drag and heat-exchange correlations for one particle (Taichi functions).
+
+Drag is returned as a coefficient K [kg/s] with F_drag = K (u - v), u the interstitial gas
+velocity at the particle and v the particle velocity; eps is the local voidage, d the
+diameter, w = |u - v|, rho and mu the gas density and viscosity.
+
+* GIDASPOW (Gidaspow 1994, the Ergun / Wen-Yu switch of source 1), F = V_p beta/(1-eps) (u - v):
+    eps <  0.8 (Ergun):  beta = 150 (1-eps)^2 mu / (eps d^2) + 1.75 (1-eps) rho w / d
+    eps >= 0.8 (Wen-Yu): beta = 0.75 C_D Re (1-eps) mu / d^2 eps^-2.65,
+                         Re = eps rho w d / mu, C_D Re = 24 (1 + 0.15 Re^0.687) (Re < 1000),
+                         0.44 Re above (Schiller-Naumann).
+  For eps -> 1 this is the single-sphere drag C_D (pi d^2/4) rho w^2 / 2.
+* DI_FELICE (Di Felice 1994): F = C_D (pi d^2/4) rho eps^2 w (u - v) eps^-chi / 2,
+    C_D = (0.63 + 4.8 Re^-1/2)^2, chi = 3.7 - 0.65 exp(-(1.5 - log10 Re)^2 / 2), Re as above.
+
+Heat exchange h [W/(m^2 K)] from the Nusselt number Nu = h d / k_g:
+* RANZ_MARSHALL (Ranz & Marshall 1952; source 1): Nu = 2 + 0.6 Re_p^1/2 Pr^1/3, Re_p = rho w d / mu.
+* GUNN (Gunn 1978): Nu = (7 - 10 eps + 5 eps^2)(1 + 0.7 Re^0.2 Pr^1/3)
+                         + (1.33 - 2.4 eps + 1.2 eps^2) Re^0.7 Pr^1/3, Re = eps rho w d / mu.
+"""
+
+import math
+
+import taichi as ti
+
+GIDASPOW, DI_FELICE = 0, 1
+DRAG_IDS = {"gidaspow": GIDASPOW, "di_felice": DI_FELICE}
+RANZ_MARSHALL, GUNN = 0, 1
+NUSSELT_IDS = {"ranz_marshall": RANZ_MARSHALL, "gunn": GUNN}
+PI = math.pi
+
+
+def make_drag(model: int, rho: float, mu: float):
+    """Return drag_coefficient(eps, d, w) -> K [kg/s] for the chosen correlation."""
+
+    @ti.func
+    def drag_coefficient(eps, d, w):
+        re = eps * rho * w * d / mu
+        k = 0.0
+        if ti.static(model == GIDASPOW):
+            vol = PI / 6.0 * d * d * d
+            beta = 0.0
+            if eps < 0.8:
+                beta = 150.0 * (1.0 - eps) ** 2 * mu / (eps * d * d) + 1.75 * (1.0 - eps) * rho * w / d
+            else:
+                cd_re = 0.44 * re
+                if re < 1000.0:
+                    cd_re = 24.0 * (1.0 + 0.15 * re**0.687)
+                beta = 0.75 * cd_re * (1.0 - eps) * mu / (d * d) * eps**-2.65
+            k = vol * beta / ti.max(1.0 - eps, 1e-12)
+        else:
+            re_s = ti.max(re, 1e-12)
+            cd_w = (0.63 * ti.sqrt(w) + 4.8 * ti.sqrt(mu / (eps * rho * d))) ** 2  # C_D w, finite at w = 0
+            lg = ti.log(re_s) / ti.log(10.0)
+            chi = 3.7 - 0.65 * ti.exp(-0.5 * (1.5 - lg) ** 2)
+            k = 0.5 * cd_w * (0.25 * PI * d * d) * rho * eps * eps * eps**-chi
+        return k
+
+    return drag_coefficient
+
+
+def make_nusselt(model: int, rho: float, mu: float, prandtl: float):
+    """Return nusselt(eps, d, w) for the chosen correlation."""
+    pr3 = prandtl ** (1.0 / 3.0)
+
+    @ti.func
+    def nusselt(eps, d, w):
+        nu = 0.0
+        if ti.static(model == RANZ_MARSHALL):
+            nu = 2.0 + 0.6 * ti.sqrt(rho * w * d / mu) * pr3
+        else:
+            re = eps * rho * w * d / mu
+            nu = (7.0 - 10.0 * eps + 5.0 * eps * eps) * (1.0 + 0.7 * re**0.2 * pr3) \
+                + (1.33 - 2.4 * eps + 1.2 * eps * eps) * re**0.7 * pr3
+        return nu
+
+    return nusselt

@@ -1,0 +1,135 @@
+"""Particle <-> gas exchange: voidage, drag, pressure-gradient force, heat exchange.
+
+At each gas step (every `coupling_interval` DEM steps):
+  deposit_volume: eps_c = 1 - sum_p w_pc V_p / V_cell (cloud-in-cell, `gas_grid.make_cic`),
+                  clipped below at `min_voidage`.
+  couple:         per particle, eps_p and u_p interpolated with the same weights; the drag
+                  coefficient K_p (`drag.make_drag`) and heat conductance H_p = h_p pi d^2
+                  (`drag.make_nusselt`) are frozen until the next gas step; K_p w_pf is added
+                  to face f's implicit drag coefficient B_f and K_p w_pf v_p to Bv_f, and with
+                  heat H_p w_pc to the cell's H_c and H_p w_pc T_p to HT_c.
+  sample:         after the gas step, u_p, grad p_p and T_g,p at each particle.
+Every DEM step (`add_gas_forces`): f_p += K_p (u_p - v_p) - V_p grad p_p (source 1, Tsuji
+form, the gas carrying -eps grad p), and q_p += H_p (T_g,p - T_p).
+Because interpolation and deposition share weights that sum to 1, the drag the gas feels,
+sum_f B_f u_f - Bv_f, equals minus the sum of the particle drag forces at the gas step
+(momentum exchange balances exactly), and likewise for heat.
+"""
+
+import math
+
+import taichi as ti
+
+from .drag import make_drag, make_nusselt
+from .gas_grid import make_cic
+
+
+def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
+                          heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026):
+    """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n)) for particles S and gas G."""
+    cic, corner, weight = make_cic(gg)
+    drag_coefficient = make_drag(drag_model, rho, mu)
+    nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
+    inv_vol = 1.0 / gg.volume
+    U = G.u
+    B = G.B
+    BV = G.Bv
+    GP = G.gp
+
+    @ti.func
+    def sample_faces(F: ti.template(), x):
+        out = ti.Vector([0.0, 0.0, 0.0])
+        for c in ti.static(range(3)):
+            base, frac = cic(x, c)
+            for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                out[c] += weight(frac, o) * F[c][corner(base, o, c)]
+        return out
+
+    @ti.func
+    def sample_cells(F: ti.template(), x):
+        base, frac = cic(x, -1)
+        out = 0.0
+        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+            out += weight(frac, o) * F[corner(base, o, -1)]
+        return out
+
+    @ti.func
+    def volume(i):
+        r = S.radius[i]
+        return 4.0 / 3.0 * math.pi * r * r * r
+
+    @ti.kernel
+    def deposit_volume(n: ti.i32):
+        for I in ti.grouped(G.solid_vol):
+            G.solid_vol[I] = 0.0
+        for i in range(n):
+            if S.active[i]:
+                base, frac = cic(S.x[i], -1)
+                vp = volume(i)
+                for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                    G.solid_vol[corner(base, o, -1)] += weight(frac, o) * vp
+        for I in ti.grouped(G.eps):
+            G.eps_old[I] = G.eps[I]
+            G.eps[I] = ti.max(1.0 - G.solid_vol[I] * inv_vol, min_voidage)
+
+    @ti.kernel
+    def couple(n: ti.i32) -> ti.f64:
+        """Freeze K_p (and H_p) and deposit them; return max over particles of K_p / m_p [1/s]."""
+        for c in ti.static(range(3)):
+            for I in ti.grouped(B[c]):
+                B[c][I] = 0.0
+                BV[c][I] = 0.0
+        if ti.static(heat):
+            for I in ti.grouped(G.H):
+                G.H[I] = 0.0
+                G.HT[I] = 0.0
+        rate = 0.0
+        for i in range(n):
+            if S.active[i]:
+                x = S.x[i]
+                eps = sample_cells(G.eps, x)
+                u = sample_faces(U, x)
+                d = 2.0 * S.radius[i]
+                w = (u - S.v[i]).norm()
+                k = drag_coefficient(eps, d, w)
+                S.gK[i] = k
+                S.geps[i] = eps
+                ti.atomic_max(rate, k * S.inv_mass[i])
+                for c in ti.static(range(3)):
+                    base, frac = cic(x, c)
+                    for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                        wk = weight(frac, o) * k
+                        J = corner(base, o, c)
+                        B[c][J] += wk
+                        BV[c][J] += wk * S.v[i][c]
+                if ti.static(heat):
+                    h = nusselt(eps, d, w) * k_gas / d
+                    hp = h * math.pi * d * d
+                    S.gH[i] = hp
+                    base, frac = cic(x, -1)
+                    for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                        J = corner(base, o, -1)
+                        wh = weight(frac, o) * hp
+                        G.H[J] += wh
+                        G.HT[J] += wh * S.T[i]
+        return rate
+
+    @ti.kernel
+    def sample(n: ti.i32):
+        for i in range(n):
+            if S.active[i]:
+                x = S.x[i]
+                S.gu[i] = sample_faces(U, x)
+                S.ggp[i] = sample_faces(GP, x)
+                if ti.static(heat):
+                    S.gT[i] = sample_cells(G.T, x)
+
+    @ti.kernel
+    def add_gas_forces(n: ti.i32):
+        for i in range(n):
+            if S.active[i]:
+                S.f[i] += S.gK[i] * (S.gu[i] - S.v[i]) - volume(i) * S.ggp[i]
+                if ti.static(heat):
+                    S.q[i] += S.gH[i] * (S.gT[i] - S.T[i])
+
+    return deposit_volume, couple, sample, add_gas_forces

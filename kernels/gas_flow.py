@@ -1,0 +1,349 @@
+"""Locally averaged incompressible gas on the staggered grid: predictor, pressure projection
+by preconditioned conjugate gradients, velocity correction, and gas energy.
+
+Equations (source 1, Tsuji/Kawaguchi form; gas density rho and viscosity mu constant):
+    d(eps)/dt + div(eps u) = 0
+    rho eps Du/Dt = -eps grad p - f + eps rho g + mu lap u,   f = sum_p K_p (u - v_p) / V
+(the conservative form rho [d(eps u)/dt + div(eps u u)] reduces to this by continuity).
+One gas step of length dt on face f (eps_f the mean of the two cells, B_f and Bv_f the
+deposited drag coefficients of `gas_coupling`, per cell volume V):
+  predictor, drag implicit:  u*_f = [rho eps_f (u_adv + dt (nu lap u + g)) + dt Bv_f / V]
+                                    / (rho eps_f + dt B_f / V),
+      u_adv the semi-Lagrangian value u^n(x_f - dt u^n(x_f)) (stable for any step);
+  correction:                u_f = u*_f - A_f grad p_f,   A_f = dt eps_f / (rho eps_f + dt B_f / V);
+  pressure:                  div(eps A grad p) = div(eps u*) + (eps^{n+1} - eps^n) / dt,
+      a symmetric positive definite system for -p, solved by Jacobi-preconditioned CG to a
+      relative residual `tolerance`, warm-started from the last pressure (in one thread
+      for small grids, `cg_serial`; else one parallel launch per CG stage).
+Boundaries: inlet faces at the bottom carry a set superficial velocity (eps_f u_f = U_in);
+the top is a pressure outlet (p = 0 on the face); other box sides and faces of solid cells
+(cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
+periodic axes wrap.
+Gas energy (upwind finite volume, particle exchange implicit, so stable for any exchange rate):
+  rho c [eps^{n+1} T^{n+1} - eps^n T^n] V / dt + rho c sum_f (eps u)_f A_f T_up = HT - H T^{n+1}.
+"""
+
+import taichi as ti
+
+from .gas_grid import make_cic
+
+CLOSED, INTERIOR, INLET, OUTLET = 0, 1, 2, 3
+
+
+def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0):
+    """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas`)."""
+    cic, corner, weight = make_cic(gg)
+    n = gg.cells
+    per = gg.periodic
+    h = ti.Vector(list(gg.h))
+    lo = ti.Vector(list(gg.lo))
+    nu = mu / rho
+    g = ti.Vector(list(gravity))
+    vol = gg.volume
+    area = ti.Vector([gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]])
+    U, US, A, C, K, GP = G.u, G.us, G.A, G.C, G.kind, G.gp
+
+    @ti.func
+    def unit(c: ti.template()):
+        e = ti.Vector([0, 0, 0])
+        e[c] = 1
+        return e
+
+    @ti.func
+    def cell_index(I):
+        """Wrap periodic axes, clamp open ones."""
+        for a in ti.static(range(3)):
+            if ti.static(per[a]):
+                I[a] = I[a] % n[a]
+            else:
+                I[a] = ti.min(ti.max(I[a], 0), n[a] - 1)
+        return I
+
+    @ti.func
+    def face_index(I, c: ti.template()):
+        for a in ti.static(range(3)):
+            if ti.static(per[a]):
+                I[a] = I[a] % n[a]
+            else:
+                top = n[a] - 1
+                if ti.static(a == c):
+                    top = n[a]
+                I[a] = ti.min(ti.max(I[a], 0), top)
+        return I
+
+    @ti.func
+    def face_eps(I, c: ti.template()):
+        return 0.5 * (G.eps[cell_index(I - unit(c))] + G.eps[cell_index(I)])
+
+    @ti.func
+    def sample(F: ti.template(), c: ti.template(), x):
+        base, frac = cic(x, c)
+        out = 0.0
+        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+            out += weight(frac, o) * F[corner(base, o, c)]
+        return out
+
+    @ti.kernel
+    def predict(dt: ti.f64):
+        for c in ti.static(range(3)):
+            for I in ti.grouped(U[c]):
+                kind = K[c][I]
+                ef = face_eps(I, c)
+                if kind == INLET:
+                    US[c][I] = G.inlet[I[0], I[1]] / ef
+                    A[c][I] = 0.0
+                elif kind == CLOSED:
+                    US[c][I] = 0.0
+                    A[c][I] = 0.0
+                else:
+                    xf = lo + (I + 0.5) * h
+                    xf[c] -= 0.5 * h[c]
+                    vel = ti.Vector([sample(U[0], 0, xf), sample(U[1], 1, xf), sample(U[2], 2, xf)])
+                    u_adv = sample(U[c], c, xf - dt * vel)
+                    lap = 0.0
+                    for a in ti.static(range(3)):
+                        e = unit(a)
+                        lap += (U[c][face_index(I + e, c)] - 2.0 * U[c][I] + U[c][face_index(I - e, c)]) / (h[a] * h[a])
+                    b = G.B[c][I] / vol
+                    denom = rho * ef + dt * b
+                    US[c][I] = (rho * ef * (u_adv + dt * (nu * lap + g[c])) + dt * G.Bv[c][I] / vol) / denom
+                    A[c][I] = dt * ef / denom
+                    coef = ef * A[c][I] / (h[c] * h[c])
+                    if kind == OUTLET:
+                        coef *= 2.0
+                    C[c][I] = coef
+                if kind == CLOSED or kind == INLET:
+                    C[c][I] = 0.0
+
+    @ti.func
+    def apply(x: ti.template(), I):
+        """(-L x)_I: sum over faces of C_f (x_I - x_neighbour); identity on solid cells."""
+        out = x[I]
+        if G.solid[I] == 0:
+            out = 0.0
+            for c in ti.static(range(3)):
+                e = unit(c)
+                fm = I
+                fp = face_index(I + e, c)
+                cm = C[c][fm]
+                cp = C[c][fp]
+                if K[c][fm] == OUTLET:
+                    out += cm * x[I]
+                elif cm > 0.0:
+                    out += cm * (x[I] - x[cell_index(I - e)])
+                if K[c][fp] == OUTLET:
+                    out += cp * x[I]
+                elif cp > 0.0:
+                    out += cp * (x[I] - x[cell_index(I + e)])
+        return out
+
+    @ti.kernel
+    def assemble(dt: ti.f64) -> ti.f64:
+        """rhs b = -(div(eps u*) + d eps/dt), Jacobi diagonal; return |b|^2."""
+        bb = 0.0
+        for I in ti.grouped(G.p):
+            b = 0.0
+            dg = 1.0
+            if G.solid[I] == 0:
+                dg = 0.0
+                div = (G.eps[I] - G.eps_old[I]) / dt
+                for c in ti.static(range(3)):
+                    e = unit(c)
+                    fp = face_index(I + e, c)
+                    div += (face_eps(fp, c) * US[c][fp] - face_eps(I, c) * US[c][I]) / h[c]
+                    dg += C[c][I] + C[c][fp]
+                b = -div
+            G.rhs[I] = b
+            G.diag[I] = ti.max(dg, 1e-300)
+            bb += b * b
+        return bb
+
+    @ti.kernel
+    def cg_start() -> ti.f64:
+        """r = b + L p (warm start), z = r / diag, d = z; return r.z."""
+        rz = 0.0
+        for I in ti.grouped(G.p):
+            r = G.rhs[I] - apply(G.p, I)
+            if G.solid[I] == 1:
+                r = 0.0
+            G.cg_r[I] = r
+            z = r / G.diag[I]
+            G.cg_d[I] = z
+            rz += r * z
+        return rz
+
+    @ti.kernel
+    def cg_apply() -> ti.f64:
+        """q = -L d; return d.q."""
+        dq = 0.0
+        for I in ti.grouped(G.p):
+            q = apply(G.cg_d, I)
+            if G.solid[I] == 1:
+                q = 0.0
+            G.cg_q[I] = q
+            dq += G.cg_d[I] * q
+        return dq
+
+    @ti.kernel
+    def cg_update(alpha: ti.f64):
+        """p += alpha d, r -= alpha q; sums[0] = r.z, sums[1] = r.r with z = r / diag."""
+        G.sums[0] = 0.0
+        G.sums[1] = 0.0
+        for I in ti.grouped(G.p):
+            G.p[I] += alpha * G.cg_d[I]
+            r = G.cg_r[I] - alpha * G.cg_q[I]
+            G.cg_r[I] = r
+            G.sums[0] += r * r / G.diag[I]
+            G.sums[1] += r * r
+
+    @ti.kernel
+    def cg_direction(beta: ti.f64):
+        for I in ti.grouped(G.p):
+            G.cg_d[I] = G.cg_r[I] / G.diag[I] + beta * G.cg_d[I]
+
+    @ti.kernel
+    def cg_serial(max_iterations: ti.i32, tol_abs: ti.f64) -> ti.i32:
+        """The whole CG solve in one thread (small grids: no launch or thread-pool cost per
+        iteration); returns the iterations, leaves |r|^2 in sums[1]."""
+        ti.loop_config(serialize=True)
+        for _ in range(1):
+            rz = 0.0
+            for i, j, k in ti.ndrange(n[0], n[1], n[2]):
+                I = ti.Vector([i, j, k])
+                r = 0.0
+                if G.solid[I] == 0:
+                    r = G.rhs[I] - apply(G.p, I)
+                G.cg_r[I] = r
+                G.cg_d[I] = r / G.diag[I]
+                rz += r * r / G.diag[I]
+            it = 0
+            rr = rz
+            while it < max_iterations:
+                dq = 0.0
+                for i, j, k in ti.ndrange(n[0], n[1], n[2]):
+                    I = ti.Vector([i, j, k])
+                    q = 0.0
+                    if G.solid[I] == 0:
+                        q = apply(G.cg_d, I)
+                    G.cg_q[I] = q
+                    dq += G.cg_d[I] * q
+                it += 1
+                if dq <= 0.0:
+                    break
+                alpha = rz / dq
+                rz_new = 0.0
+                rr = 0.0
+                for i, j, k in ti.ndrange(n[0], n[1], n[2]):
+                    I = ti.Vector([i, j, k])
+                    G.p[I] += alpha * G.cg_d[I]
+                    r = G.cg_r[I] - alpha * G.cg_q[I]
+                    G.cg_r[I] = r
+                    rz_new += r * r / G.diag[I]
+                    rr += r * r
+                if ti.sqrt(rr) <= tol_abs:
+                    break
+                beta = rz_new / rz
+                rz = rz_new
+                for i, j, k in ti.ndrange(n[0], n[1], n[2]):
+                    I = ti.Vector([i, j, k])
+                    G.cg_d[I] = G.cg_r[I] / G.diag[I] + beta * G.cg_d[I]
+            G.sums[1] = rr
+            G.sums[0] = it
+        return ti.cast(G.sums[0], ti.i32)
+
+    @ti.kernel
+    def correct():
+        """Extend p into solid cells, pressure gradient on every face, u = u* - A grad p."""
+        for I in ti.grouped(G.p):
+            if G.solid[I] == 1:
+                s = 0.0
+                m = 0
+                for c in ti.static(range(3)):
+                    for sgn in ti.static((-1, 1)):
+                        J = cell_index(I + sgn * unit(c))
+                        if G.solid[J] == 0:
+                            s += G.p[J]
+                            m += 1
+                G.p[I] = s / ti.max(m, 1)
+        for c in ti.static(range(3)):
+            for I in ti.grouped(U[c]):
+                e = unit(c)
+                grad = 0.0
+                inside = 1
+                if ti.static(not per[c]):
+                    inside = 0
+                    if I[c] > 0 and I[c] < n[c]:
+                        inside = 1
+                if K[c][I] == OUTLET:
+                    grad = -G.p[cell_index(I - e)] / (0.5 * h[c])
+                elif inside == 1:
+                    grad = (G.p[cell_index(I)] - G.p[cell_index(I - e)]) / h[c]
+                elif ti.static(n[c] > 1):
+                    J = I
+                    if I[c] == 0:
+                        J[c] = 1
+                    else:
+                        J[c] = n[c] - 1
+                    grad = (G.p[cell_index(J)] - G.p[cell_index(J - e)]) / h[c]
+                GP[c][I] = grad
+                U[c][I] = US[c][I] - A[c][I] * grad
+
+    @ti.kernel
+    def divergence(dt: ti.f64) -> ti.f64:
+        """max over fluid cells of |d eps/dt + div(eps u)| [1/s] after the correction."""
+        worst = 0.0
+        for I in ti.grouped(G.p):
+            if G.solid[I] == 0:
+                div = (G.eps[I] - G.eps_old[I]) / dt
+                for c in ti.static(range(3)):
+                    fp = face_index(I + unit(c), c)
+                    div += (face_eps(fp, c) * U[c][fp] - face_eps(I, c) * U[c][I]) / h[c]
+                ti.atomic_max(worst, ti.abs(div))
+        return worst
+
+    @ti.kernel
+    def courant(dt: ti.f64) -> ti.f64:
+        """Largest face Courant number |u| dt / h."""
+        worst = 0.0
+        for c in ti.static(range(3)):
+            for I in ti.grouped(U[c]):
+                ti.atomic_max(worst, ti.abs(U[c][I]) * dt / h[c])
+        return worst
+
+    @ti.kernel
+    def energy(dt: ti.f64, t_in: ti.f64):
+        """Upwind advection of eps T with implicit particle exchange (module docstring)."""
+        for I in ti.grouped(G.T):
+            G.T_new[I] = G.T[I]
+            if G.solid[I] == 0:
+                net = 0.0  # sum over faces of rho c (eps u)_f A_f T_up, outward positive
+                for c in ti.static(range(3)):
+                    e = unit(c)
+                    for side in ti.static((0, 1)):
+                        f = I
+                        if ti.static(side == 1):
+                            f = face_index(I + e, c)
+                        kind = K[c][f]
+                        if kind != CLOSED:
+                            flux = face_eps(f, c) * U[c][f] * area[c]
+                            if ti.static(side == 0):
+                                flux = -flux
+                            t_up = G.T[I]
+                            if kind == INLET:
+                                t_up = t_in
+                            elif flux < 0.0 and kind == INTERIOR:
+                                nb = I - e
+                                if ti.static(side == 1):
+                                    nb = I + e
+                                t_up = G.T[cell_index(nb)]
+                            net += flux * t_up
+                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * G.HT[I]) \
+                    / (rho_c * G.eps[I] * vol + dt * G.H[I])
+        for I in ti.grouped(G.T):
+            G.T[I] = G.T_new[I]
+
+    kernels = dict(predict=predict, assemble=assemble, cg_start=cg_start, cg_apply=cg_apply, cg_update=cg_update,
+                   cg_direction=cg_direction, cg_serial=cg_serial, correct=correct, divergence=divergence, courant=courant)
+    if heat:
+        kernels["energy"] = energy
+    return kernels

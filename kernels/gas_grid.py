@@ -1,0 +1,84 @@
+"""The gas grid: a staggered (MAC) Eulerian grid over the domain, and the particle <-> grid
+weights that both interpolation and deposition use.
+
+Cells carry voidage, pressure and gas temperature at their centres; face component c
+(0 = x, 1 = y, 2 = z) carries the gas velocity u_c and the pressure gradient at the centres of
+the faces normal to axis c. On a periodic axis the last face is the first one, so face
+arrays have n_c faces there and n_c + 1 on an open axis.
+
+Cloud-in-cell (trilinear) weights: a particle at x sees the 8 lattice points around it with
+weights that sum to 1; on an open axis an index past the end is clamped to the boundary point
+(its weight folds back, so deposited volume is conserved), on a periodic axis it wraps.
+Interpolating a field with these weights and depositing with the same weights are adjoint,
+which is what makes the drag reaction on the gas equal and opposite to the drag on the
+particles (see `kernels/gas_coupling.py`).
+"""
+
+from dataclasses import dataclass
+
+import taichi as ti
+
+
+@dataclass(frozen=True)
+class GasGrid:
+    """lo [m], cells per axis, cell size h per axis [m], periodic flags (z is never periodic)."""
+
+    lo: tuple[float, float, float]
+    cells: tuple[int, int, int]
+    h: tuple[float, float, float]
+    periodic: tuple[bool, bool, bool]
+
+    @property
+    def volume(self) -> float:
+        return self.h[0] * self.h[1] * self.h[2]
+
+    def face_shape(self, c: int) -> tuple[int, int, int]:
+        n = list(self.cells)
+        if not self.periodic[c]:
+            n[c] += 1
+        return tuple(n)
+
+    def center(self, idx) -> tuple[float, float, float]:
+        return tuple(self.lo[a] + (idx[a] + 0.5) * self.h[a] for a in range(3))
+
+
+def make_cic(gg: GasGrid):
+    """Return cic(x, stagger) -> (base index vector, fraction vector) and corner(base, o, shape).
+
+    stagger = -1 for cell centres, c (0..2) for faces normal to axis c.
+    """
+    lo = ti.Vector(list(gg.lo))
+    inv_h = ti.Vector([1.0 / v for v in gg.h])
+    per = gg.periodic
+    n = gg.cells
+
+    @ti.func
+    def cic(x, stagger: ti.template()):
+        g = (x - lo) * inv_h - 0.5
+        if ti.static(stagger >= 0):
+            g[stagger] += 0.5
+        base = ti.floor(g)
+        return ti.cast(base, ti.i32), g - base
+
+    @ti.func
+    def corner(base, o, stagger: ti.template()):
+        """Lattice index of corner o (0/1 per axis) of the CIC cube, clamped or wrapped."""
+        idx = base + o
+        for a in ti.static(range(3)):
+            if ti.static(per[a]):
+                idx[a] = idx[a] % n[a]
+            else:
+                top = n[a] - 1
+                if ti.static(stagger == a):
+                    top = n[a]
+                idx[a] = ti.min(ti.max(idx[a], 0), top)
+        return idx
+
+    @ti.func
+    def weight(frac, o):
+        w = 1.0
+        for a in ti.static(range(3)):
+            w *= frac[a] if o[a] == 1 else 1.0 - frac[a]
+        return w
+
+    return cic, corner, weight

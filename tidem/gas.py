@@ -1,0 +1,247 @@
+"""The gas phase of a run (built only when the scene has a `[gas]` table).
+
+`GasPhase` owns the gas grid's Taichi fields (see `kernels/gas_flow.py` for the equations and
+`kernels/gas_coupling.py` for the exchange with particles) and advances the gas by one step
+of `coupling_interval` DEM steps: deposit voidage and drag, predict, project (CG), correct,
+gas energy, then sample the new gas state at the particles. Stability limits it cannot
+meet (gas Courant number, a drag relaxation time shorter than the DEM step) raise
+`GasError` with the setting to change.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import taichi as ti
+
+from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
+from tidem.kernels.gas_coupling import make_coupling_kernels
+from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET, make_flow_kernels
+from tidem.kernels.gas_grid import GasGrid
+
+MAX_COURANT = 0.5
+SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster)
+
+
+class GasError(RuntimeError):
+    """The gas step cannot go on stably; the message names the setting to change."""
+
+
+def gas_grid(scene) -> GasGrid:
+    """Cells of about `gas.cell_size` (a whole number per axis) over the domain."""
+    dom = scene.domain
+    cells, h = [], []
+    for a in range(3):
+        length = dom.max[a] - dom.min[a]
+        n = max(1, int(round(length / scene.gas.cell_size)))
+        cells.append(n)
+        h.append(length / n)
+    periodic = tuple("xyz"[a] in dom.periodic for a in range(3))
+    return GasGrid(lo=tuple(dom.min), cells=tuple(cells), h=tuple(h), periodic=periodic)
+
+
+def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
+    """1 for cells whose centre lies inside a tube (wall for the gas)."""
+    idx = np.indices(gg.cells).reshape(3, -1).T
+    centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
+    solid = np.zeros(len(idx), np.int32)
+    for t in tubes:
+        d = (centres - np.asarray(t["c"])) * np.asarray(t["mask"])
+        solid |= (np.einsum("ij,ij->i", d, d) < t["r"] ** 2).astype(np.int32)
+    return solid.reshape(gg.cells)
+
+
+def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:
+    """Per face component: CLOSED, INTERIOR, INLET (bottom) or OUTLET (top)."""
+    kinds = []
+    for c in range(3):
+        shape = gg.face_shape(c)
+        kind = np.full(shape, INTERIOR, np.int32)
+        idx = np.indices(shape)
+        below = [idx[a] - (1 if a == c else 0) for a in range(3)]
+        above = [idx[a] for a in range(3)]
+        for cell in (below, above):
+            i = [np.mod(cell[a], gg.cells[a]) if gg.periodic[a] else np.clip(cell[a], 0, gg.cells[a] - 1)
+                 for a in range(3)]
+            kind[solid[i[0], i[1], i[2]] == 1] = CLOSED
+        if not gg.periodic[c]:
+            lo_face = kind[tuple(0 if a == c else slice(None) for a in range(3))]  # views
+            hi_face = kind[tuple(gg.cells[c] if a == c else slice(None) for a in range(3))]
+            if c == 2:
+                lo_face[lo_face != CLOSED] = INLET
+                hi_face[hi_face != CLOSED] = OUTLET
+            else:
+                lo_face[:] = CLOSED
+                hi_face[:] = CLOSED
+        kinds.append(kind)
+    return kinds
+
+
+def inlet_map(gg: GasGrid, gas) -> np.ndarray:
+    """Superficial inlet velocity [m/s] of each bottom face (nozzles override the background)."""
+    xc = gg.lo[0] + (np.arange(gg.cells[0]) + 0.5) * gg.h[0]
+    yc = gg.lo[1] + (np.arange(gg.cells[1]) + 0.5) * gg.h[1]
+    X, Y = np.meshgrid(xc, yc, indexing="ij")
+    u = np.full(X.shape, gas.inlet_velocity)
+    for nz in gas.nozzles:
+        inside = (X >= nz.x[0]) & (X <= nz.x[1])
+        if nz.y is not None:
+            inside &= (Y >= nz.y[0]) & (Y <= nz.y[1])
+        u[inside] = nz.velocity
+    return u
+
+
+class GasPhase:
+    """Gas fields and the gas step for one Solver."""
+
+    def __init__(self, model, S, fp):
+        scene = model.scene
+        gas = scene.gas
+        self.gas = gas
+        self.gg = gg = gas_grid(scene)
+        self.heat = model.features.heat
+        self.interval = gas.coupling_interval
+        self.dt = gas.coupling_interval * model.dt
+        self.tol = max(gas.tolerance, 1e-5 if fp == ti.f32 else 0.0)
+        self.solid = solid_cells(gg, model.tubes)
+        self.kinds = face_kinds(gg, self.solid)
+        self.inlet = inlet_map(gg, gas)
+        G = SimpleNamespace()
+        fb = ti.FieldsBuilder()
+        cell_names = ["eps", "eps_old", "solid_vol", "p", "rhs", "diag", "cg_r", "cg_d", "cg_q"]
+        if self.heat:
+            cell_names += ["T", "T_new", "H", "HT"]
+        for name in cell_names:
+            setattr(G, name, ti.field(fp))
+            fb.dense(ti.ijk, gg.cells).place(getattr(G, name))
+        G.solid = ti.field(ti.i32)
+        fb.dense(ti.ijk, gg.cells).place(G.solid)
+        for name, dtype in (("u", fp), ("us", fp), ("A", fp), ("C", fp), ("gp", fp), ("B", fp), ("Bv", fp),
+                            ("kind", ti.i32)):
+            comps = [ti.field(dtype) for _ in range(3)]
+            for c in range(3):
+                fb.dense(ti.ijk, gg.face_shape(c)).place(comps[c])
+            setattr(G, name, comps)
+        G.inlet = ti.field(fp)
+        fb.dense(ti.ij, gg.cells[:2]).place(G.inlet)
+        G.sums = ti.field(fp)
+        fb.dense(ti.i, 2).place(G.sums)
+        self._tree = fb.finalize()
+        self.G = G
+        G.solid.from_numpy(self.solid)
+        for c in range(3):
+            G.kind[c].from_numpy(self.kinds[c])
+        G.eps.fill(1.0)
+        G.eps_old.fill(1.0)
+        k_gas = scene.heat.gas_conductivity if self.heat else 0.026
+        self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
+                                      gas.density * gas.heat_capacity)
+        self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
+            gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
+            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas)
+        if self.heat:
+            T0 = gas.initial_temperature or scene.heat.initial_temperature
+            G.T.fill(T0)
+            self.t_in = gas.inlet_temperature or scene.heat.initial_temperature
+        self.n = model.capacity
+        self.iterations = 0
+        self.residual = 0.0
+        self.divergence = 0.0
+        self.steps = 0
+        self.set_inlet(0.0)
+        self._deposit(self.n)
+        G.eps_old.copy_from(G.eps)
+        # start from the inlet flow (at its ramped value) spread over the bed
+        uz = np.where(self.kinds[2] == CLOSED, 0.0, gas.inlet_velocity * self.inlet_scale)
+        G.u[2].from_numpy(uz)
+
+    def set_inlet(self, t: float) -> None:
+        ramp = self.gas.inlet_ramp
+        scale = min(t / ramp, 1.0) if ramp > 0 else 1.0
+        self.G.inlet.from_numpy(self.inlet * scale)
+        self.inlet_scale = scale
+
+    def step(self, t: float) -> None:
+        """One gas step ending at time t (particles at their current positions and velocities)."""
+        dt = self.dt
+        f = self.flow
+        if self.gas.inlet_ramp > 0:
+            self.set_inlet(t)
+        self._deposit(self.n)
+        rate = self._couple(self.n)
+        if rate * dt / self.interval > 1.0:
+            raise GasError(
+                f"the drag relaxation time of the lightest particle ({1.0 / rate:.3g} s) is shorter than the DEM step "
+                f"({dt / self.interval:.3g} s): lower numerics.dt (or dt_fraction), or use larger particles")
+        f["predict"](dt)
+        self._project(dt)
+        f["correct"]()
+        courant = f["courant"](dt)
+        if courant > MAX_COURANT:
+            raise GasError(
+                f"gas Courant number {courant:.2f} exceeds {MAX_COURANT} at t = {t:.6g} s (gas step {dt:.3g} s): "
+                f"lower gas.coupling_interval (now {self.interval})")
+        if self.heat:
+            f["energy"](dt, self.t_in)
+        self.divergence = f["divergence"](dt)
+        self._sample(self.n)
+        self.steps += 1
+
+    def _project(self, dt: float) -> None:
+        """Solve for p by Jacobi-preconditioned CG (module `kernels/gas_flow`)."""
+        f, G = self.flow, self.G
+        bb = f["assemble"](dt)
+        u_scale = max(float(np.abs(self.inlet).max()) * self.inlet_scale, 1e-3)
+        scale = max(math.sqrt(bb), u_scale / min(self.gg.h) * math.sqrt(self.solid.size))
+        if self.solid.size <= SERIAL_CELLS:
+            it = f["cg_serial"](self.gas.max_iterations, self.tol * scale)
+            self._finish(it, math.sqrt(max(float(G.sums[1]), 0.0)) / scale)
+            return
+        rz = f["cg_start"]()
+        it = 0
+        rr = rz
+        for it in range(1, self.gas.max_iterations + 1):
+            dq = f["cg_apply"]()
+            if dq <= 0.0:
+                break
+            alpha = rz / dq
+            f["cg_update"](alpha)
+            rz_new, rr = float(G.sums[0]), float(G.sums[1])
+            if math.sqrt(rr) <= self.tol * scale:
+                break
+            f["cg_direction"](rz_new / rz)
+            rz = rz_new
+        self._finish(it, math.sqrt(max(rr, 0.0)) / scale)
+
+    def _finish(self, it: int, residual: float) -> None:
+        self.iterations = it
+        self.residual = residual
+        if residual > 10 * self.tol and it >= self.gas.max_iterations:
+            raise GasError(
+                f"the pressure solve did not converge in {it} iterations (relative residual {self.residual:.2e}, "
+                f"tolerance {self.tol:.0e}): raise gas.max_iterations or gas.tolerance")
+
+    def pressure_drop(self) -> float:
+        """Mean pressure on the inlet faces [Pa] (p = 0 at the outlet), fluid cells only."""
+        p = self.G.p.to_numpy()[:, :, 0]
+        gp = self.G.gp[2].to_numpy()[:, :, 0]
+        open_ = self.kinds[2][:, :, 0] == INLET
+        if not open_.any():
+            return 0.0
+        face = p - 0.5 * self.gg.h[2] * gp
+        return float(face[open_].mean())
+
+    def summary(self) -> dict:
+        out = dict(gas_pressure_drop_Pa=self.pressure_drop(), gas_cg_iterations=self.iterations,
+                   gas_residual=self.residual, gas_divergence_per_s=self.divergence)
+        if self.heat:
+            T = self.G.T.to_numpy()[self.solid == 0]
+            out["gas_T_mean_K"] = float(T.mean())
+        return out
+
+    def release(self) -> None:
+        if self._tree is not None:
+            self._tree.destroy()
+            self._tree = None
