@@ -254,21 +254,36 @@ def check(
 
 @app.command()
 def bench(
-    sizes: Annotated[str, typer.Option(help="Comma-separated particle counts")] = "10000,50000,200000",
+    sizes: Annotated[Optional[str], typer.Option(help="Comma-separated particle counts "
+                                                 "(default 10000,50000,200000; with --render 2000,20000)")] = None,
     precision: Annotated[str, typer.Option(help="float32, float64 or both")] = "both",
     steps: Annotated[int, typer.Option(help="Timed steps per case (scaled down for large N)")] = 2000,
-    threads: Annotated[int, typer.Option(help="CPU threads")] = 2,
+    threads: Annotated[int, typer.Option(help="CPU threads (with --render: llvmpipe threads)")] = 2,
     out: Annotated[Optional[Path], typer.Option(help="Write results as JSON here")] = None,
     bed: Annotated[Optional[Path], typer.Option(help="Use this bed instead: a LAMMPS/LIGGGHTS data file "
                                                 "(id type diameter density x y z) or an .npz with 'x'")] = None,
+    render: Annotated[bool, typer.Option("--render", help="Frames per second of the frame renderer instead "
+                                         "(1280x720, speed and temperature colours)")] = False,
 ):
-    """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history)."""
+    """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history),
+    or with --render frames per second of the renderer."""
+    try:
+        counts = [int(v) for v in (sizes or ("2000,20000" if render else "10000,50000,200000")).split(",")]
+    except ValueError:
+        _fail(f"--sizes {sizes}: expected comma-separated particle counts, e.g. --sizes 2000,20000", 2)
+    if render:
+        from tidem.render.bench import run_render_bench
+        from tidem.render.gl import RenderUnavailable
+
+        try:
+            run_render_bench(counts, threads, out)
+        except RenderUnavailable as exc:
+            _fail(f"tidem bench --render: {exc}", 2)
+        return
     from tidem.bench import run_matrix
 
     if precision not in ("float32", "float64", "both"):
         _fail(f"--precision {precision}: choose float32, float64 or both", 2)
     if bed is not None and not bed.exists():
         _fail(f"--bed {bed}: no such file", 2)
-    run_matrix([int(s) for s in sizes.split(",")], ["float32", "float64"] if precision == "both" else [precision],
-               steps, threads, out, bed)
-
+    run_matrix(counts, ["float32", "float64"] if precision == "both" else [precision], steps, threads, out, bed)
