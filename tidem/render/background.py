@@ -5,7 +5,8 @@ The simulation process never imports VTK. At the first snapshot it starts a work
 renders each new snapshot to its frame with `tidem.render.frames.render_frame`, the function
 `tidem render` uses, with the style `tidem render` would use (run.json's settings and colour
 range), so the frames are the same either way. The worker runs with one llvmpipe thread
-(and one OpenMP/BLAS/VTK thread) at a lower priority, so the simulation keeps its cores.
+(and one OpenMP/BLAS/VTK thread) at idle priority, so the simulation keeps its cores and the
+renderer uses what they leave.
 
 When the run ends the parent closes the worker's stdin: the worker renders the snapshots
 that are left and exits, and the parent encodes the movie. On Ctrl-C the parent stops the
@@ -28,7 +29,6 @@ from tidem.render.movie import clear_frames, frame_path, snapshots
 
 THREAD_CAPS = {"LP_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
                "MKL_NUM_THREADS": "1", "VTK_SMP_MAX_THREADS": "1"}
-NICE = 5  # the renderer yields to the simulation when both want a core
 POLL_S = 0.2  # how often the worker looks for new snapshots [s]
 
 
@@ -133,9 +133,18 @@ def work(run_dir: Path) -> None:
             return
 
 
+def _yield_to_simulation() -> None:
+    """Run only when a core is idle (Linux SCHED_IDLE: the simulation's threads preempt us at
+    once); elsewhere at the lowest nice level."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+    except (AttributeError, OSError):
+        os.nice(19)
+
+
 def main(argv: list[str]) -> int:
     _die_with_parent(int(argv[1]))
-    os.nice(NICE)
+    _yield_to_simulation()
     try:
         work(Path(argv[0]))
     except (ValueError, KeyError) as exc:
