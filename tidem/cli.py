@@ -53,6 +53,7 @@ def scene(
     arch: Annotated[str, typer.Option(help="Taichi backend: cpu, cuda, vulkan or auto")] = "cpu",
     quiet: Annotated[bool, typer.Option(help="No progress bar")] = False,
     no_render: Annotated[bool, typer.Option("--no-render", help="Skip frames and movie")] = False,
+    view: Annotated[bool, typer.Option("--view", help="Show the run in a window while it goes on (space pauses)")] = False,
 ):
     """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
     if arch not in ("cpu", "cuda", "vulkan", "auto"):
@@ -73,53 +74,110 @@ def scene(
     typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
                f"{f' (+{model.capacity - int(model.active0.sum())} to pour)' if model.pours else ''}, "
                f"dt = {model.dt:.3g} s, t_end = {model.t_end:.4g} s -> {out_dir}", err=True)
-    result = run(model, out_dir, progress=not quiet)
-    s = result.summary
-    typer.echo(f"{result.status}: {s['steps']} steps in {s['wall_s']:.1f} s "
-               f"({s['particle_steps_per_s']:.3g} particle-steps/s); output in {out_dir}", err=True)
-    if not no_render and result.status != "interrupted":
-        _render(out_dir, model.name, quiet=quiet)
+    live = _live_view(model) if view else None
+    with _background(out_dir, no_render) as background:
+        result = run(model, out_dir, progress=not quiet, on_snapshot=background, view=live)
+        if live is not None:
+            live.close()
+        s = result.summary
+        typer.echo(f"{result.status}: {s['steps']} steps in {s['wall_s']:.1f} s "
+                   f"({s['particle_steps_per_s']:.3g} particle-steps/s); output in {out_dir}", err=True)
+        if background is not None and result.status != "interrupted":
+            _finish_render(background, out_dir, model.name, quiet)
     if result.status == "failed":
         _fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
     if result.status == "interrupted":
         _fail(result.message + f"; finished output is in {out_dir}", 130)
 
 
-def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_thickness=None, gif=None,
-            quiet=False) -> None:
-    """Frames and movie of a run folder; a machine without OpenGL gets a message, not a crash."""
-    import json
+def _live_view(model):
+    """The live view window, or None (with one line saying why) where no display answers."""
+    from tidem.render.live import LiveView, display_problem
+    from tidem.render.settings import render_settings
 
+    problem = display_problem()
+    if problem:
+        typer.echo(f"tidem: --view: {problem}; running without the live view", err=True)
+        return None
+    return LiveView(model, render_settings(model))
+
+
+def _background(out_dir: Path, no_render: bool):
+    """The background renderer of a run (a context manager yielding None when not rendering)."""
+    import contextlib
+
+    if no_render:
+        return contextlib.nullcontext()
     from tidem.render.gl import RenderUnavailable, prepare_offscreen
 
     try:
         prepare_offscreen()
     except RenderUnavailable as exc:
         typer.echo(f"tidem: not rendering: {exc}", err=True)
-        return
-    from tidem.render.movie import render_run, snapshots, style_for
+        return contextlib.nullcontext()
+    from tidem.render.background import BackgroundRenderer
 
-    if not snapshots(run_dir):
-        typer.echo(f"tidem: nothing to render: {run_dir} has no snapshots", err=True)
-        return
+    return BackgroundRenderer(out_dir)
 
-    try:
-        style = style_for(run_dir, field, clim, view, slice_thickness)
-    except (ValueError, KeyError) as exc:
-        _fail(f"tidem render: {exc}", 2)
-    settings = json.loads((run_dir / "run.json").read_text()).get("render", {})
+
+def _report(quiet: bool):
+    """Progress of the frames on stderr (a running count on a terminal, the last line otherwise)."""
+    shown = [-1]
 
     def report(k, n):
-        if not quiet and (k == n or sys.stderr.isatty()):
+        if not quiet and k != shown[0] and (k == n or sys.stderr.isatty()):
             typer.echo(f"\rrendering frame {k}/{n}", nl=k == n, err=True)
+            shown[0] = k
+    return report
 
-    movie = render_run(run_dir, style, name, fps=settings.get("fps", 15),
-                       gif=settings.get("gif", False) if gif is None else gif, progress=report)
+
+def _finish_render(background, run_dir: Path, name: str, quiet: bool) -> None:
+    """Wait for the frames still to render in the background, then the movie and plots."""
+    if background.proc is None:
+        typer.echo(f"tidem: nothing to render: {run_dir} has no snapshots", err=True)
+        return
+    try:
+        error = background.finish(progress=_report(quiet))
+    except KeyboardInterrupt:
+        background.stop()
+        _fail(f"interrupted while rendering; the finished frames are in {run_dir / 'frames'} "
+              f"('tidem render {run_dir}' renders them all)", 130)
+    if error:
+        typer.echo(f"tidem: rendering failed: {error}", err=True)
+        return
+    _movie_and_plots(run_dir, name)
+
+
+def _movie_and_plots(run_dir: Path, name: str, gif=None) -> None:
+    import json
+
+    from tidem.render.movie import write_movie
     from tidem.render.plots import plot_timeseries
 
+    settings = json.loads((run_dir / "run.json").read_text()).get("render", {})
+    movie = write_movie(run_dir, name, fps=settings.get("fps", 15),
+                        gif=settings.get("gif", False) if gif is None else gif)
     plots = plot_timeseries(run_dir)
     typer.echo(f"frames in {run_dir / 'frames'}, movie {movie}"
                f"{f', plots in {plots[0].parent}' if plots else ''}", err=True)
+
+
+def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_thickness=None, gif=None) -> None:
+    """Frames and movie of a run folder; a machine without OpenGL gets a message, not a crash."""
+    from tidem.render.gl import RenderUnavailable, prepare_offscreen
+
+    try:
+        prepare_offscreen()
+    except RenderUnavailable as exc:
+        _fail(f"tidem render: {exc}", 2)
+    from tidem.render.movie import render_frames, style_for
+
+    try:
+        style = style_for(run_dir, field, clim, view, slice_thickness)
+        render_frames(run_dir, style, progress=_report(False))
+    except (ValueError, KeyError) as exc:
+        _fail(f"tidem render: {exc.args[0] if exc.args else exc}", 2)
+    _movie_and_plots(run_dir, name, gif)
 
 
 @app.command()
@@ -196,21 +254,36 @@ def check(
 
 @app.command()
 def bench(
-    sizes: Annotated[str, typer.Option(help="Comma-separated particle counts")] = "10000,50000,200000",
+    sizes: Annotated[Optional[str], typer.Option(help="Comma-separated particle counts "
+                                                 "(default 10000,50000,200000; with --render 2000,20000)")] = None,
     precision: Annotated[str, typer.Option(help="float32, float64 or both")] = "both",
     steps: Annotated[int, typer.Option(help="Timed steps per case (scaled down for large N)")] = 2000,
-    threads: Annotated[int, typer.Option(help="CPU threads")] = 2,
+    threads: Annotated[int, typer.Option(help="CPU threads (with --render: llvmpipe threads)")] = 2,
     out: Annotated[Optional[Path], typer.Option(help="Write results as JSON here")] = None,
     bed: Annotated[Optional[Path], typer.Option(help="Use this bed instead: a LAMMPS/LIGGGHTS data file "
                                                 "(id type diameter density x y z) or an .npz with 'x'")] = None,
+    render: Annotated[bool, typer.Option("--render", help="Frames per second of the frame renderer instead "
+                                         "(1280x720, speed and temperature colours)")] = False,
 ):
-    """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history)."""
+    """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history),
+    or with --render frames per second of the renderer."""
+    try:
+        counts = [int(v) for v in (sizes or ("2000,20000" if render else "10000,50000,200000")).split(",")]
+    except ValueError:
+        _fail(f"--sizes {sizes}: expected comma-separated particle counts, e.g. --sizes 2000,20000", 2)
+    if render:
+        from tidem.render.bench import run_render_bench
+        from tidem.render.gl import RenderUnavailable
+
+        try:
+            run_render_bench(counts, threads, out)
+        except RenderUnavailable as exc:
+            _fail(f"tidem bench --render: {exc}", 2)
+        return
     from tidem.bench import run_matrix
 
     if precision not in ("float32", "float64", "both"):
         _fail(f"--precision {precision}: choose float32, float64 or both", 2)
     if bed is not None and not bed.exists():
         _fail(f"--bed {bed}: no such file", 2)
-    run_matrix([int(s) for s in sizes.split(",")], ["float32", "float64"] if precision == "both" else [precision],
-               steps, threads, out, bed)
-
+    run_matrix(counts, ["float32", "float64"] if precision == "both" else [precision], steps, threads, out, bed)

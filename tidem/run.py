@@ -9,6 +9,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -17,6 +18,7 @@ from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
 from tidem.observables import alpha_profile, contact_times
+from tidem.render.settings import render_settings
 from tidem.solver import RunError, Solver
 
 
@@ -37,13 +39,14 @@ class Output:
         self.dir = Path(out_dir)
         self.snap_dir = self.dir / "snapshots"
         self.snap_dir.mkdir(parents=True, exist_ok=True)
-        for old in self.snap_dir.glob("*.vtp"):
-            old.unlink()
+        for old in [*self.snap_dir.glob("*.vtp"), self.dir / "snapshots.pvd"]:
+            old.unlink(missing_ok=True)
         self.model = model
         self.entries: list[tuple[float, str]] = []
         self.series = TimeSeries(self.dir / "timeseries.csv")
 
-    def snapshot(self, solver: Solver) -> None:
+    def snapshot(self, solver: Solver) -> Path:
+        """Write the next snapshot and list it in snapshots.pvd; returns its file."""
         S = solver.state
         active = S.active.to_numpy().astype(bool)
         idx = np.flatnonzero(active)
@@ -59,6 +62,7 @@ class Output:
         }, time=solver.t)
         self.entries.append((solver.t, f"snapshots/{name}"))
         write_pvd(self.dir / "snapshots.pvd", self.entries)
+        return self.snap_dir / name
 
     def sample(self, solver: Solver) -> None:
         row = {"time_s": solver.t, "step": solver.steps}
@@ -113,7 +117,7 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
         "particle_steps_per_s": n * steps / wall if wall > 0 else 0.0,
         "precision": f.precision,
         "scene_echo": model.loaded.raw,
-        "render": {"field": "temperature" if f.heat else "speed", **model.scene.render.model_dump(exclude_none=True)},
+        "render": render_settings(model),
         "render_geometry": {
             "bounds": [v for a in range(3) for v in (model.scene.domain.min[a], model.scene.domain.max[a])],
             "periodic": list(model.grid.periodic),
@@ -127,8 +131,14 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
     return out
 
 
-def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | None = None) -> RunResult:
-    """Run `model` to its end time, writing to `out_dir`."""
+def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | None = None,
+        on_snapshot: Callable[[Path], None] | None = None, view=None) -> RunResult:
+    """Run `model` to its end time, writing to `out_dir`.
+
+    `on_snapshot` is called with each snapshot file once it is on disk (the background
+    renderer starts on the first); `view` (a `tidem.render.live.LiveView`) is updated after
+    every step. Time the view spends paused is not counted in wall_s.
+    """
     out = Output(out_dir, model)
     out.write_summary(summary(model, None, "starting", 0.0))
     t_setup = time.perf_counter()
@@ -153,8 +163,12 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     out.sample(solver)
                     next_series += series_dt
                 if solver.t >= next_snap - 1e-12 * t_end:
-                    out.snapshot(solver)
+                    written = out.snapshot(solver)
                     next_snap += snap_dt
+                    if on_snapshot is not None:
+                        on_snapshot(written)
+                if view is not None:
+                    view.update(solver)
                 if solver.steps >= total_steps:
                     break
                 solver.step()
@@ -169,7 +183,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         out.series.close()
         if model.angle_bins:
             out.write_alpha_profile(solver)
-        wall = time.perf_counter() - t0
+        wall = time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
         data = summary(model, solver, status, wall, message)
         data["setup_s"] = setup_s
         out.write_summary(data)

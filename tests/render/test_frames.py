@@ -63,6 +63,11 @@ def test_scene_run_writes_frames_and_movie(tmp_path):
     assert reader.count_frames() == len(frames)
     for plot in ("energy.png", "timeseries.png"):
         assert (out / "plots" / plot).stat().st_size > 10000
+    # the frames rendered in the background during the run are those of `tidem render`
+    during = {p.name: p.read_bytes() for p in frames}
+    result = CliRunner().invoke(app, ["render", str(out)])
+    assert result.exit_code == 0, result.output
+    assert {p.name: p.read_bytes() for p in sorted((out / "frames").glob("frame_*.png"))} == during
     # re-render with another field and range, without re-running
     result = CliRunner().invoke(app, ["render", str(out), "--field", "contacts", "--range", "0,1"])
     assert result.exit_code == 0, result.output

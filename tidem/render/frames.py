@@ -9,6 +9,7 @@ outline, and the simulated time as a stamp.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -97,7 +98,7 @@ def place_camera(pl, style: FrameStyle) -> None:
 
 
 def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) -> None:
-    """Render one snapshot to a PNG."""
+    """Render one snapshot to a PNG (written under a temporary name, then renamed)."""
     prepare_offscreen()
     import pyvista as pv
 
@@ -134,5 +135,7 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
     pl.add_mesh(pv.Box(bounds=style.bounds).outline(), color="black", line_width=1)
     pl.add_text(f"t = {time:.4g} s", position="upper_left", font_size=12, color="black")
     place_camera(pl, style)
-    pl.screenshot(str(out_png))
+    tmp = Path(out_png).with_name("." + Path(out_png).name)  # a stopped render leaves no half-written frame
+    pl.screenshot(str(tmp))
     pl.close()
+    os.replace(tmp, out_png)

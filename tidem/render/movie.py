@@ -1,8 +1,10 @@
 """Render a run folder: every snapshot to `frames/frame_NNNNN.png`, then `<scene>.mp4`
 (H.264, yuv420p, through the ffmpeg that imageio-ffmpeg ships) and optionally a GIF.
 
-The colour range is fixed for the whole movie: the scene's `render.range`, or else taken
-from all snapshots (0 to the largest 99th percentile for speed, min to max otherwise).
+The colour range is fixed for the whole movie: the range stored in run.json (the scene's
+`render.range` or its default, see `tidem.render.settings`); for another field than the
+run's, or a run.json without a range, it is taken from all snapshots (0 to the largest 99th
+percentile for speed, min to max otherwise).
 """
 
 from __future__ import annotations
@@ -48,11 +50,13 @@ def style_for(run_dir: Path, field: str | None = None, clim=None, view: str | No
     info = json.loads((Path(run_dir) / "run.json").read_text())
     geo = info["render_geometry"]
     settings = info.get("render", {})
-    field = field or settings.get("field") or "speed"
+    run_field = settings.get("field") or "speed"
+    field = field or run_field
     if field not in FIELDS:
         raise ValueError(f"--field {field}: choose one of {', '.join(FIELDS)}")
     view = view or settings.get("view", "front")
-    clim = clim or settings.get("range") or auto_range(field, snapshots(run_dir))
+    stored = settings.get("range") if field == run_field else None
+    clim = clim or stored or auto_range(field, snapshots(run_dir))
     bounds = tuple(geo["bounds"])
     return FrameStyle(field=field, clim=tuple(clim), colormap=settings.get("colormap") or FIELDS[field][1],
                       size=frame_size(view, bounds, settings.get("height", 720)), view=view, bounds=bounds,
@@ -60,23 +64,35 @@ def style_for(run_dir: Path, field: str | None = None, clim=None, view: str | No
                       slice_thickness=slice_thickness if slice_thickness is not None else settings.get("slice"))
 
 
-def render_run(run_dir: Path, style: FrameStyle, name: str, fps: int = 15, gif: bool = False, progress=None) -> Path:
-    """Render all frames and the movie; returns the MP4 path."""
+def frame_path(run_dir: Path, k: int) -> Path:
+    """The PNG of snapshot number k."""
+    return Path(run_dir) / "frames" / f"frame_{k:05d}.png"
+
+
+def clear_frames(run_dir: Path) -> None:
+    """Remove the frames of an earlier rendering (and half-written ones of a stopped one)."""
+    frames_dir = Path(run_dir) / "frames"
+    frames_dir.mkdir(exist_ok=True)
+    for old in [*frames_dir.glob("frame_*.png"), *frames_dir.glob(".frame_*.png")]:
+        old.unlink()
+
+
+def render_frames(run_dir: Path, style: FrameStyle, progress=None) -> None:
+    """Render every snapshot of a run folder to its frame, replacing earlier frames."""
+    clear_frames(run_dir)
+    snaps = snapshots(run_dir)
+    for k, (t, f) in enumerate(snaps):
+        render_frame(f, t, style, frame_path(run_dir, k))
+        if progress:
+            progress(k + 1, len(snaps))
+
+
+def write_movie(run_dir: Path, name: str, fps: int = 15, gif: bool = False) -> Path:
+    """Encode the frames of a run folder as `<name>.mp4` (and `<name>.gif`); returns the MP4 path."""
     import imageio.v2 as imageio
 
     run_dir = Path(run_dir)
-    frames_dir = run_dir / "frames"
-    frames_dir.mkdir(exist_ok=True)
-    for old in frames_dir.glob("frame_*.png"):
-        old.unlink()
-    snaps = snapshots(run_dir)
-    paths = []
-    for k, (t, f) in enumerate(snaps):
-        png = frames_dir / f"frame_{k:05d}.png"
-        render_frame(f, t, style, png)
-        paths.append(png)
-        if progress:
-            progress(k + 1, len(snaps))
+    paths = sorted((run_dir / "frames").glob("frame_*.png"))
     movie = run_dir / f"{name}.mp4"
     with imageio.get_writer(movie, fps=fps, codec="libx264", pixelformat="yuv420p", macro_block_size=16) as w:
         for p in paths:

@@ -32,6 +32,8 @@ def heat_checks(scene: Scene) -> list[str]:
     temps += [(f"walls[{i}].temperature", w.temperature) for i, w in enumerate(scene.walls)]
     temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
     if scene.heat is None:
+        if scene.render.field == "temperature":
+            errs.append("render.field: 'temperature' needs a [heat] table (particles have no temperature without it)")
         errs += [f"{key}: temperatures need a [heat] table (add '[heat]' to switch heat transfer on)"
                  for key, value in temps if value is not None]
         return errs

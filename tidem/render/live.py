@@ -1,0 +1,200 @@
+"""Live view: a Taichi GUI window that shows the run while it goes on (`tidem scene --view`).
+
+Particles are drawn as discs projected on the plane of the scene's render view (front: x
+right, z up; side: y right, z up; top: x right, y up; iso falls back to front), the nearest
+drawn last, coloured by the run's field with the colour map and fixed range of its frames
+(`tidem.render.settings`). Tubes (grey, with their periodic images), the domain outline, a
+colour bar and the simulated time are drawn too. Space pauses and resumes the run; Esc or
+closing the window ends the view and the run goes on headless. The window is redrawn at most
+`MAX_FPS` times per second of wall time, so drawing costs the run little.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import os
+import time
+
+import numpy as np
+
+from tidem.render.frames import FIELDS, field_values, tube_images
+
+MAX_FPS = 10
+MAX_PLOT = (960, 720)  # largest plot area [px]
+MARGIN = 16  # px around the domain
+TOP = 32  # px above the domain, for the time stamp
+BAR = 120  # px of colour-bar panel right of the plot
+# (horizontal axis, vertical axis, depth axis, depth sign of the camera side) as in frames.place_camera
+VIEW_AXES = {"front": (0, 2, 1, -1), "side": (1, 2, 0, 1), "top": (0, 1, 2, 1)}
+
+
+def display_problem() -> str | None:
+    """Why no window can be opened here, or None when an X display answers."""
+    name = os.environ.get("DISPLAY", "")
+    if not name:
+        return "no display ($DISPLAY is not set)"
+    lib = ctypes.util.find_library("X11")
+    if lib is None:
+        return "no X11 library (libX11) to open a window"
+    x11 = ctypes.CDLL(lib)
+    x11.XOpenDisplay.restype = ctypes.c_void_p
+    x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    handle = x11.XOpenDisplay(name.encode())
+    if not handle:
+        return f"cannot open display '{name}'"
+    x11.XCloseDisplay(handle)
+    return None
+
+
+def colour_table(colormap: str, n: int = 256) -> np.ndarray:
+    """The colour map as n 0xRRGGBB integers."""
+    import matplotlib
+
+    rgb = (matplotlib.colormaps[colormap](np.linspace(0.0, 1.0, n))[:, :3] * 255).round().astype(np.uint32)
+    return (rgb[:, 0] << 16) | (rgb[:, 1] << 8) | rgb[:, 2]
+
+
+class LiveView:
+    """The window; `update(solver)` after every step draws when due and holds while paused."""
+
+    def __init__(self, model, settings: dict):
+        import taichi as ti
+
+        self.ti = ti
+        self.model = model
+        self.field = settings["field"]
+        self.clim = tuple(settings["range"])
+        self.table = colour_table(settings.get("colormap") or FIELDS[self.field][1])
+        dom = model.scene.domain
+        self.lo, self.hi = np.asarray(dom.min, float), np.asarray(dom.max, float)
+        self.h, self.v, self.d, self.sign = VIEW_AXES.get(settings.get("view", "front"), VIEW_AXES["front"])
+        ext = self.hi - self.lo
+        self.scale = min((MAX_PLOT[0] - 2 * MARGIN) / ext[self.h], (MAX_PLOT[1] - 2 * MARGIN) / ext[self.v])
+        self.plot_w = int(ext[self.h] * self.scale) + 2 * MARGIN
+        self.res = (self.plot_w + BAR, int(ext[self.v] * self.scale) + MARGIN + TOP)
+        self.gui = ti.GUI(f"tidem: {model.name}", res=self.res, background_color=0xFFFFFF)
+        self.paused = False
+        self.paused_s = 0.0
+        self._last = -np.inf
+        self._scene = None
+
+    def to_window(self, p: np.ndarray) -> np.ndarray:
+        """Plane coordinates (n, 3) [m] -> window coordinates (n, 2) in [0, 1]."""
+        return np.stack([(MARGIN + (p[:, self.h] - self.lo[self.h]) * self.scale) / self.res[0],
+                         (MARGIN + (p[:, self.v] - self.lo[self.v]) * self.scale) / self.res[1]], axis=1)
+
+    def capture(self, solver) -> None:
+        """Take the particles' positions, sizes and colours from the solver."""
+        S = solver.state
+        idx = np.flatnonzero(S.active.to_numpy())
+        x = S.x.to_numpy()[idx]
+        data = {"radius": S.radius.to_numpy()[idx]}
+        if self.field == "speed":
+            data["velocity"] = S.v.to_numpy()[idx]
+        elif self.field == "temperature":
+            data["temperature"] = S.T.to_numpy()[idx]
+        elif self.field == "group":
+            data["group"] = self.model.group[idx]
+        elif self.field == "contacts":
+            data["contacts"] = S.ncontact.to_numpy()[idx]
+        values = field_values(self.field, data)
+        lo, hi = self.clim
+        k = np.clip((values - lo) / (hi - lo), 0.0, 1.0) * (len(self.table) - 1)
+        order = np.argsort(self.sign * x[:, self.d], kind="stable")  # far first, nearest last
+        self._scene = (self.to_window(x[order]), data["radius"][order] * self.scale,
+                       self.table[k.round().astype(int)][order], solver.t)
+
+    def draw(self, note: str = "") -> None:
+        """Draw the last captured state and show it."""
+        gui = self.gui
+        pos, radius, colour, t = self._scene
+        for tube in self.model.tubes:
+            for c in tube_images(tube, self.lo, self.hi, self.model.grid.periodic):
+                self._draw_tube(c, tube)
+        if len(pos):
+            gui.circles(pos, radius=np.maximum(radius, 1.0), color=colour)
+        corners = self.to_window(np.array([self.lo, self.hi]))
+        self._mask_outside(corners)
+        gui.rect((corners[0, 0], corners[1, 1]), (corners[1, 0], corners[0, 1]), radius=1, color=0x000000)
+        gui.text(f"t = {t:.4g} s", (corners[0, 0], 1.0 - 6 / self.res[1]), font_size=16, color=0x000000)
+        self._draw_bar()
+        if note:
+            gui.text(note, ((self.plot_w + 8) / self.res[0], 0.1), font_size=14, color=0xC00000)
+        gui.show()
+
+    def _mask_outside(self, corners: np.ndarray) -> None:
+        """Paint the window outside the domain white (tube images and periodic particles reach out)."""
+        (x0, y0), (x1, y1) = corners
+        boxes = np.array([[0, 0, 1, y0], [0, y1, 1, 1], [0, y0, x0, y1], [x1, y0, 1, y1]])
+        a, c = boxes[:, :2], boxes[:, 2:]
+        b, d = np.stack([c[:, 0], a[:, 1]], axis=1), np.stack([a[:, 0], c[:, 1]], axis=1)
+        self.gui.triangles(np.vstack([a, a]), np.vstack([b, c]), np.vstack([c, d]), color=0xFFFFFF)
+
+    def _draw_tube(self, centre: np.ndarray, tube: dict) -> None:
+        r = tube["r"]
+        if tube["mask"][self.d] == 0.0:  # seen end-on: a disc
+            self.gui.circle(self.to_window(centre[None])[0], radius=r * self.scale, color=0x9A9A9A)
+            return
+        lo, hi = centre - r, centre + r  # seen side-on: a band across the domain
+        axis = int(np.argmin(tube["mask"]))
+        lo[axis], hi[axis] = self.lo[axis], self.hi[axis]
+        a, b = self.to_window(np.array([lo, hi]))
+        tri_a = np.array([[a[0], a[1]], [a[0], a[1]]])
+        tri_b = np.array([[b[0], a[1]], [b[0], b[1]]])
+        tri_c = np.array([[b[0], b[1]], [a[0], b[1]]])
+        self.gui.triangles(tri_a, tri_b, tri_c, color=0x9A9A9A)
+
+    def _draw_bar(self) -> None:
+        gui, w, h = self.gui, self.res[0], self.res[1]
+        n = len(self.table)
+        x0, x1 = (self.plot_w + 20) / w, (self.plot_w + 45) / w
+        y = 0.15 + 0.7 * np.arange(n + 1) / n
+        a = np.stack([np.full(n, x0), y[:-1]], axis=1)
+        c = np.stack([np.full(n, x1), y[1:]], axis=1)
+        b = np.stack([np.full(n, x1), y[:-1]], axis=1)
+        d = np.stack([np.full(n, x0), y[1:]], axis=1)
+        gui.triangles(a, b, c, color=self.table)
+        gui.triangles(a, c, d, color=self.table)
+        lo, hi = self.clim
+        gui.text(f"{hi:.3g}", (x1 + 0.01, 0.865), font_size=14, color=0x000000)
+        gui.text(f"{lo:.3g}", (x1 + 0.01, 0.165), font_size=14, color=0x000000)
+        gui.text(FIELDS[self.field][0], (x0 - 10 / w, 0.93), font_size=14, color=0x000000)
+
+    def _keys(self) -> None:
+        """Space toggles the pause; Esc or the window's close button ends the view."""
+        ti = self.ti
+        for e in self.gui.get_events(ti.GUI.PRESS):
+            if e.key == ti.GUI.SPACE:
+                self.paused = not self.paused
+            elif e.key == ti.GUI.ESCAPE:
+                self.close()
+                return
+        if not self.gui.running:
+            self.close()
+
+    def update(self, solver) -> None:
+        """Redraw when due; while paused, keep the window alive until space is pressed again."""
+        if self.gui is None:
+            return
+        now = time.perf_counter()
+        if now - self._last < 1.0 / MAX_FPS:
+            return
+        self._last = now
+        self._keys()
+        if self.gui is None:
+            return
+        self.capture(solver)
+        self.draw()
+        if self.paused:
+            while self.paused and self.gui is not None:
+                self.draw("paused (space)")
+                time.sleep(0.05)
+                self._keys()
+            self.paused_s += time.perf_counter() - now
+
+    def close(self) -> None:
+        if self.gui is not None:
+            self.gui.close()
+            self.gui = None
