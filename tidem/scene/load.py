@@ -17,7 +17,7 @@ from tidem.scene.checks import cross_checks
 from tidem.scene.errors import SceneError, format_validation_error
 from tidem.scene.schema import Scene
 
-DEFAULT_SCENE = "sphere_impact.toml"
+DEFAULT_SCENE = "fluidized_tube.toml"
 
 
 @dataclass(frozen=True)
