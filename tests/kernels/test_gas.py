@@ -95,13 +95,19 @@ def test_velocity_ramp_finds_wen_yu_minimum_fluidization_and_bed_weight(solver_f
     assert u_found == pytest.approx(umf, rel=0.2)
 
 
-def test_single_particle_falls_at_the_terminal_velocity(solver_for):
+def cd_di_felice(re):
+    return (0.63 + 4.8 / math.sqrt(re)) ** 2
+
+
+@pytest.mark.parametrize("drag, cd, vt_guess", [("gidaspow", cd_schiller_naumann, 2.24),
+                                                ("di_felice", cd_di_felice, 2.08)])
+def test_single_particle_falls_at_the_terminal_velocity(solver_for, drag, cd, vt_guess):
     d, rho_p = 3e-4, 2500.0
     raw = make_scene(
         domain={"min": [0, 0, 0], "max": [0.02, 0.02, 3.0], "walls": "none", "gravity": [0, 0, -9.81]},
         materials={"sand": SAND},
         particles=[{"name": "p", "material": "sand", "diameter": {"value": d}, "positions": [[0.01, 0.01, 2.9]]}],
-        gas={"cell_size": 0.02, "coupling_interval": 5},
+        gas={"cell_size": 0.02, "coupling_interval": 5, "drag": drag},
         numerics={"dt": 2e-4, "force_dt": True},
     )
     s = solver_for(raw)
@@ -112,13 +118,23 @@ def test_single_particle_falls_at_the_terminal_velocity(solver_for):
     lo, hi = 0.01, 10.0
     for _ in range(100):
         vt = 0.5 * (lo + hi)
-        drag = cd_schiller_naumann(RHO_G * vt * d / MU) * math.pi * d * d / 8 * RHO_G * vt * vt
-        lo, hi = (vt, hi) if drag < (rho_p - RHO_G) * math.pi * d**3 / 6 * 9.81 else (lo, vt)
-    assert vt == pytest.approx(2.24, abs=0.05), "the particle is in the intermediate (Schiller-Naumann) regime"
+        drag_force = cd(RHO_G * vt * d / MU) * math.pi * d * d / 8 * RHO_G * vt * vt
+        lo, hi = (vt, hi) if drag_force < (rho_p - RHO_G) * math.pi * d**3 / 6 * 9.81 else (lo, vt)
+    assert vt == pytest.approx(vt_guess, abs=0.05), "the particle is in the intermediate regime"
     assert v == pytest.approx(vt, rel=0.02)
 
 
-def test_fixed_particle_heats_as_lumped_solution_with_ranz_marshall(solver_for):
+def nu_ranz_marshall(re, pr):
+    return 2 + 0.6 * math.sqrt(re) * pr ** (1 / 3)
+
+
+def nu_gunn_single(re, pr):
+    """Gunn (1978) at voidage 1."""
+    return 2 * (1 + 0.7 * re**0.2 * pr ** (1 / 3)) + 0.13 * re**0.7 * pr ** (1 / 3)
+
+
+@pytest.mark.parametrize("model, nusselt", [("ranz_marshall", nu_ranz_marshall), ("gunn", nu_gunn_single)])
+def test_fixed_particle_heats_as_lumped_solution(solver_for, model, nusselt):
     d, u, t_gas, t_p = 2e-3, 1.0, 400.0, 300.0
     raw = make_scene(
         domain={"min": [0, 0, 0], "max": [0.02, 0.02, 0.1], "walls": "none", "gravity": [0, 0, -9.81]},
@@ -126,7 +142,8 @@ def test_fixed_particle_heats_as_lumped_solution_with_ranz_marshall(solver_for):
         particles=[{"name": "p", "material": "sand", "diameter": {"value": d}, "positions": [[0.01, 0.01, 0.05]],
                     "fixed": True, "temperature": t_p}],
         heat={"gas_conductivity": 0.026, "initial_temperature": t_gas},
-        gas={"cell_size": 0.02, "inlet_velocity": u, "inlet_temperature": t_gas, "coupling_interval": 1},
+        gas={"cell_size": 0.02, "inlet_velocity": u, "inlet_temperature": t_gas, "coupling_interval": 1,
+             "heat_transfer": model},
         numerics={"dt": 1e-3, "force_dt": True},
     )
     s = solver_for(raw)
@@ -134,7 +151,7 @@ def test_fixed_particle_heats_as_lumped_solution_with_ranz_marshall(solver_for):
         s.step()
     re = RHO_G * u * d / MU
     pr = 1005.0 * MU / 0.026
-    h = (2 + 0.6 * math.sqrt(re) * pr ** (1 / 3)) * 0.026 / d
+    h = nusselt(re, pr) * 0.026 / d
     m = 2500 * math.pi * d**3 / 6
     rate = h * math.pi * d * d / (m * 100.0)
     assert rate * s.t > 1.0, "the test covers most of the heating"
