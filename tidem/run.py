@@ -121,7 +121,7 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
         "render_geometry": {
             "bounds": [v for a in range(3) for v in (model.scene.domain.min[a], model.scene.domain.max[a])],
             "periodic": list(model.grid.periodic),
-            "tubes": [{"c": t["c"], "mask": t["mask"], "r": t["r"]} for t in model.tubes],
+            "tubes": [{"c": t["c"], "mask": t["mask"], "r": t["r"], "T": t["T"]} for t in model.tubes],
         },
     }
     if solver is not None and f.contact_time:

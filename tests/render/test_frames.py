@@ -107,3 +107,23 @@ def test_render_refuses_bad_options(tmp_path):
     (tmp_path / "snapshots.pvd").write_text('<?xml version="1.0"?><VTKFile type="Collection"><Collection/></VTKFile>')
     result = CliRunner().invoke(app, ["render", str(tmp_path)])
     assert result.exit_code == 2 and "empty" in result.output
+
+
+def test_heated_tube_takes_its_temperature_colour(tmp_path):
+    """A tube at the top of the range is drawn in the hot end of the map; grey for speed."""
+    import imageio.v2 as imageio
+
+    snap = tmp_path / "t.vtp"
+    write_vtp(snap, np.array([[0.02, 0.01, 0.02]]),
+              {"radius": np.array([0.005]), "velocity": np.zeros((1, 3)), "temperature": np.array([300.0])})
+    tube = {"c": [0.1, 0.0, 0.05], "mask": [1.0, 0.0, 1.0], "r": 0.03, "T": 900.0}
+    counts = {}
+    for field in ("temperature", "speed"):
+        style = FrameStyle(field=field, clim=(300.0, 900.0), colormap="inferno",
+                           size=frame_size("front", BOUNDS), view="front", bounds=BOUNDS, tubes=[tube])
+        render_frame(snap, 0.0, style, tmp_path / f"{field}.png")
+        img = imageio.imread(tmp_path / f"{field}.png")[:, :, :3].astype(float)
+        img = img[:, : int(0.8 * img.shape[1])].reshape(-1, 3)  # the plot, not the colour bar
+        counts[field] = int(((img[:, 0] > 200) & (img[:, 1] > 150) & (img[:, 2] < 200)).sum())
+    assert counts["temperature"] > 2000, "pale-yellow (hot) tube pixels"
+    assert counts["speed"] < 100, "a grey tube when frames show speed"

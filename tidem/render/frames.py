@@ -60,6 +60,18 @@ def frame_size(view: str, bounds, height: int = 720) -> tuple[int, int]:
     return (width + 15) // 16 * 16, (height + 15) // 16 * 16
 
 
+def tube_colour(tube: dict, style: FrameStyle):
+    """A tube with a set temperature takes the colour map's colour for it (clipped to the
+    range) when frames show temperature; others are grey."""
+    if style.field != "temperature" or tube.get("T") is None:
+        return "#9a9a9a"
+    import matplotlib
+
+    low, high = style.clim
+    frac = min(max((tube["T"] - low) / (high - low), 0.0), 1.0)
+    return matplotlib.colormaps[style.colormap](frac)[:3]
+
+
 def tube_images(tube: dict, lo, hi, periodic) -> list[np.ndarray]:
     """Tube centre and its periodic images that reach into the box."""
     out = [np.array(tube["c"], dtype=float)]
@@ -131,7 +143,7 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
         for centre in tube_images(t, lo, hi, style.periodic):
             centre[axis] = 0.5 * (lo + hi)[axis]
             cyl = pv.Cylinder(center=centre, direction=axis.astype(float), radius=t["r"], height=length, resolution=64)
-            pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color="#9a9a9a", lighting=False)
+            pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color=tube_colour(t, style), lighting=False)
     pl.add_mesh(pv.Box(bounds=style.bounds).outline(), color="black", line_width=1)
     pl.add_text(f"t = {time:.4g} s", position="upper_left", font_size=12, color="black")
     place_camera(pl, style)
