@@ -1,4 +1,5 @@
-"""Command-line interface: `tidem scene`, `tidem scenes`, `tidem check`, `tidem bench`.
+"""Command-line interface: `tidem scene`, `tidem scenes`, `tidem check`, `tidem bench`, `tidem render`,
+`tidem tradeoff`, `tidem sweep`.
 
 Errors in a scene exit with code 2 and one message listing every problem; a run that goes
 wrong (NaN, runaway overlap, capacity) exits with code 3 after saving what it finished;
@@ -287,3 +288,98 @@ def bench(
     if bed is not None and not bed.exists():
         _fail(f"--bed {bed}: no such file", 2)
     run_matrix(counts, ["float32", "float64"] if precision == "both" else [precision], steps, threads, out, bed)
+
+
+Varies = Annotated[Optional[list[str]], typer.Option("--vary", help="KEY=V1,V2,... (repeatable; all combinations run)")]
+
+
+def _variant_line(res: dict) -> None:
+    figures = (f"{res['wall_s']:.1f} s, {res['particle_steps_per_s']:.3g} particle-steps/s"
+               if res["status"] == "finished" else res["message"].splitlines()[0][:160])
+    typer.echo(f"variant {res['index']:>2} [{res['status']}] {res['label']}: {figures}", err=True)
+
+
+def _sweep(path, vary, set_, out, workers, scheduler, reference, with_error: bool) -> None:
+    from tidem import tradeoff as tr
+
+    loaded = _load(path, set_)
+    try:
+        todo = tr.variants(tr.parse_vary(vary or []), set_ or [])
+    except ValueError as exc:
+        _fail(str(exc), 2)
+    if with_error and len(todo) < 2:
+        _fail("tidem tradeoff: give at least one --vary with two or more values", 2)
+    if reference is not None and not 0 <= reference < len(todo):
+        _fail(f"--reference {reference}: choose a variant from 0 to {len(todo) - 1}", 2)
+    from tidem.scene.load import load
+
+    for v in todo:  # every variant must be a valid scene before anything runs
+        try:
+            load(str(loaded.source), v.overrides)
+        except SceneError as exc:
+            _fail(f"variant {v.index} ({v.label}):\n{exc.render()}", 2)
+    out_dir = out or Path("renders") / f"{loaded.name}_{'tradeoff' if with_error else 'sweep'}"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    typer.echo(f"tidem: {len(todo)} variants of {loaded.name} -> {out_dir}", err=True)
+    results = tr.run_all(str(loaded.source), todo, out_dir, workers, scheduler, on_done=_variant_line)
+    results, ref = tr.with_errors(results, reference) if with_error else (results, -1)
+    tr.write_report(results, ref, out_dir, with_error)
+    typer.echo((out_dir / ("tradeoff.md" if with_error else "sweep.md")).read_text())
+
+
+@app.command()
+def tradeoff(
+    path: Annotated[str, typer.Argument(help="Scene file or shipped scene name")],
+    vary: Varies = None,
+    set_: Sets = None,
+    out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene>_tradeoff)")] = None,
+    workers: Annotated[Optional[int], typer.Option(help="Local Dask worker processes (default: one per core)")] = None,
+    scheduler: Annotated[Optional[str], typer.Option(help="Address of an existing Dask scheduler")] = None,
+    reference: Annotated[Optional[int], typer.Option(help="Variant the errors are measured against "
+                                                     "(default: most steps, then slowest)")] = None,
+    halve: Annotated[Optional[str], typer.Option(help="Halve this key until two runs agree within --tol")] = None,
+    tol: Annotated[float, typer.Option(help="Relative tolerance of --halve")] = 0.01,
+):
+    """Run variants of a scene in parallel and report wall time, particle-steps/s and observables with their
+    error against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png)."""
+    if halve is not None:
+        _halve(path, halve, tol, set_, out)
+        return
+    _sweep(path, vary, set_, out, workers, scheduler, reference, with_error=True)
+
+
+@app.command()
+def sweep(
+    path: Annotated[str, typer.Argument(help="Scene file or shipped scene name")],
+    vary: Varies = None,
+    set_: Sets = None,
+    out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene>_sweep)")] = None,
+    workers: Annotated[Optional[int], typer.Option(help="Local Dask worker processes (default: one per core)")] = None,
+    scheduler: Annotated[Optional[str], typer.Option(help="Address of an existing Dask scheduler")] = None,
+):
+    """A parameter study: one run folder per variant and one summary table (sweep.csv, sweep.md)."""
+    _sweep(path, vary, set_, out, workers, scheduler, None, with_error=False)
+
+
+def _halve(path, key: str, tol: float, set_, out) -> None:
+    from tidem import tradeoff as tr
+    from tidem.scene.load import load
+
+    loaded = _load(path, set_)
+    node = loaded.scene.model_dump()
+    for part in key.split("."):
+        node = node.get(part) if isinstance(node, dict) else None
+    if not isinstance(node, (int, float)) or isinstance(node, bool) or node <= 0:
+        _fail(f"--halve {key}: needs a positive number in the scene (found {node!r})", 2)
+    try:
+        load(str(loaded.source), list(set_ or []) + [f"{key}={node / 2!r}"])
+    except SceneError as exc:
+        _fail(exc.render(), 2)
+    out_dir = out or Path("renders") / f"{loaded.name}_halving"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    runs, value = tr.halve(str(loaded.source), key, float(node), tol, out_dir, list(set_ or []), on_done=_variant_line)
+    tr.write_report(runs, -1, out_dir, with_error=False, stem="halving")
+    if value is None:
+        _fail(f"--halve {key}: successive results did not agree within {tol:g} after {len(runs)} runs; "
+              f"see {out_dir}", 3)
+    typer.echo(f"converged: {key} = {value:g} (halving once more changed every observable by less than {tol:g})")

@@ -1,0 +1,63 @@
+"""`tidem tradeoff` and `tidem sweep` on a local Dask cluster of 2 workers, and the
+step-halving loop, on the two-sphere impact (seconds per variant)."""
+
+import csv
+
+import pytest
+from typer.testing import CliRunner
+
+from tidem.cli import app
+from tidem.tradeoff import agree, parse_vary, variants
+
+runner = CliRunner()
+
+
+def test_vary_makes_every_combination():
+    todo = variants(parse_vary(["a.b=1,2", "c=x,y,z"]), ["d=0"])
+    assert len(todo) == 6
+    assert todo[0].overrides == ["d=0", "a.b=1", "c=x"] and todo[-1].overrides == ["d=0", "a.b=2", "c=z"]
+    with pytest.raises(ValueError, match="KEY=VALUE1,VALUE2"):
+        parse_vary(["numerics.dt_fraction"])
+
+
+def test_agree_is_relative():
+    assert agree({"a": 1.0, "b": 2.0}, {"a": 1.005, "b": 2.0}, 0.01)
+    assert not agree({"a": 1.0}, {"a": 1.02}, 0.01)
+    assert not agree({"a": 1.0}, {"b": 1.0}, 0.01), "nothing to compare is not agreement"
+
+
+def test_tradeoff_on_two_local_workers(tmp_path):
+    out = tmp_path / "to"
+    result = runner.invoke(app, ["tradeoff", "sphere_impact", "--vary", "numerics.dt_fraction=0.05,0.4",
+                                 "--workers", "2", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    rows = list(csv.DictReader(open(out / "tradeoff.csv")))
+    assert [r["status"] for r in rows] == ["finished", "finished"]
+    # the reference is the finer step; the coarse step's contact time differs by a measurable amount
+    assert float(rows[0]["error_contact_time_s"]) == 0.0
+    assert 1e-4 < float(rows[1]["error_contact_time_s"]) < 0.05
+    assert float(rows[1]["dt_s"]) == pytest.approx(8 * float(rows[0]["dt_s"]))
+    assert (out / "tradeoff.md").read_text().count("| finished |") == 2
+    assert (out / "tradeoff.png").stat().st_size > 10_000
+    assert (out / "variant_00" / "run.json").exists() and (out / "variant_01" / "run.json").exists()
+
+
+def test_sweep_writes_one_folder_per_variant(tmp_path):
+    out = tmp_path / "sw"
+    result = runner.invoke(app, ["sweep", "sphere_impact", "--vary", "materials.sus304.restitution=0.5,0.9",
+                                 "--workers", "2", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    rows = list(csv.DictReader(open(out / "sweep.csv")))
+    ke = [float(r["kinetic_energy_J"]) for r in rows]
+    assert ke[0] < ke[1], "less restitution keeps less kinetic energy"
+
+
+def test_halving_converges_and_bad_keys_are_refused(tmp_path):
+    result = runner.invoke(app, ["tradeoff", "sphere_impact", "--halve", "numerics.dt_fraction", "--tol", "0.02",
+                                 "--out", str(tmp_path / "h")])
+    assert result.exit_code == 0, result.output
+    assert "converged: numerics.dt_fraction = " in result.output
+    bad = runner.invoke(app, ["tradeoff", "sphere_impact", "--halve", "numerics.precision"])
+    assert bad.exit_code == 2 and "needs a positive number" in bad.output
+    bad = runner.invoke(app, ["tradeoff", "sphere_impact", "--vary", "numerics.dt_fraction=0.1,7"])
+    assert bad.exit_code == 2 and "variant 1" in bad.output
