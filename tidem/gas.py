@@ -93,6 +93,45 @@ def inlet_map(gg: GasGrid, gas) -> np.ndarray:
     return u
 
 
+def drag_rate_bound(gas, d: float, rho_p: float) -> float:
+    """Upper estimate of K/m [1/s] for a particle of diameter d and density rho_p: the larger
+    of the Wen-Yu Stokes-range drag at eps = 0.8 (Re from the fastest inlet velocity) and the
+    Ergun drag at the clipped voidage; twice that for margin."""
+    u = max([gas.inlet_velocity] + [nz.velocity for nz in gas.nozzles]) / gas.min_voidage
+    mu, rho = gas.viscosity, gas.density
+    re = rho * u * d / mu
+    wen_yu = 18 * mu / (rho_p * d * d) * (1 + 0.15 * re**0.687) * 0.8**-2.65
+    eps = gas.min_voidage
+    ergun = (150 * (1 - eps) * mu / (eps * d * d) + 1.75 * rho * u / (eps * d)) / rho_p
+    return 2.0 * max(wen_yu, ergun)
+
+
+def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray) -> list[str]:
+    """Refusals before the first step: drag relaxation, gas Courant and diffusion numbers."""
+    gas = scene.gas
+    gg = gas_grid(scene)
+    errs = []
+    i = int(np.argmin(density * radius**2))
+    rate = drag_rate_bound(gas, 2 * radius[i], density[i])
+    if dt * rate > 1.0:
+        errs.append(f"gas: the drag relaxation time of the smallest, lightest particles (about {1 / rate:.3g} s) is "
+                    f"shorter than the time step {dt:.3g} s; use numerics.dt <= {1 / rate:.3g} (or a smaller "
+                    "dt_fraction), or larger particles")
+    dt_gas = gas.coupling_interval * dt
+    u = max([gas.inlet_velocity] + [nz.velocity for nz in gas.nozzles]) / gas.min_voidage
+    courant = u * dt_gas / min(gg.h)
+    if courant > MAX_COURANT:
+        stable = max(1, int(MAX_COURANT * min(gg.h) / (u * dt)))
+        errs.append(f"gas.coupling_interval: a gas step of {dt_gas:.3g} s gives a Courant number {courant:.2f} at the "
+                    f"interstitial inlet velocity {u:.3g} m/s (limit {MAX_COURANT}); use coupling_interval <= {stable}")
+    diffusion = gas.viscosity / gas.density * dt_gas * sum(1 / h**2 for h in gg.h)
+    if diffusion > 0.5:
+        stable = max(1, int(0.5 / (gas.viscosity / gas.density * dt * sum(1 / h**2 for h in gg.h))))
+        errs.append(f"gas.coupling_interval: the gas diffusion number nu dt sum(1/h^2) = {diffusion:.2f} exceeds 0.5; "
+                    f"use coupling_interval <= {stable} or larger gas cells")
+    return errs
+
+
 class GasPhase:
     """Gas fields and the gas step for one Solver."""
 

@@ -16,7 +16,7 @@ from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, s
 from tidem.scene.checks import largest_diameter, max_diameter
 from tidem.scene.errors import SceneError
 from tidem.scene.load import LoadedScene
-from tidem.timestep import TimeScales, time_scales
+from tidem.timestep import TimeScales, time_scales, wall_impact_overlap, weight_overlap
 
 AXES = "xyz"
 NEVER = 1e30
@@ -234,6 +234,39 @@ def _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neigh
     return float(np.min(heat_cap / np.maximum(conductance, 1e-300)))
 
 
+def _too_soft(scene, law, mats, mat_names, material, radius, x0, active, speed) -> list[str]:
+    """Contacts that would overlap more than numerics.max_overlap before the first step is
+    taken: under the weight of the initial bed (its height from the particles placed at the
+    start), and, when the scene states numerics.impact_velocity, in a wall impact at it. Each
+    message names the Young's modulus that would do (overlap ~ E^-2/3 under a load and
+    E^-2/5 in an impact for Hertz, E^-1 and E^-1/2 for the linear laws)."""
+    num = scene.numerics
+    g = abs(scene.domain.gravity[2])
+    out = []
+    for mi, mname in enumerate(mat_names):
+        sel = material == mi
+        if not sel.any():
+            continue
+        m = mats[mname]
+        d = 2.0 * float(radius[sel].max())
+        placed = x0[sel & active]
+        height = float(np.ptp(placed[:, 2])) + d if len(placed) else 0.0
+        hertz = law == "hertz_mindlin"
+        cases = [("the weight of the initial bed", weight_overlap(law, d, m.density, m.youngs_modulus, m.poisson_ratio,
+                                                                   height, g), 1.5 if hertz else 1.0)]
+        if num.impact_velocity is not None:
+            cases.append((f"an impact at numerics.impact_velocity = {speed:g} m/s",
+                          wall_impact_overlap(law, d, m.density, m.youngs_modulus, m.poisson_ratio, speed),
+                          2.5 if hertz else 2.0))
+        for what, ratio, power in cases:
+            if ratio > num.max_overlap:
+                need = m.youngs_modulus * (ratio / num.max_overlap) ** power
+                out.append(f"materials.{mname}.youngs_modulus: {what} overlaps particles by {100 * ratio:.1f} % of "
+                           f"their radius (limit numerics.max_overlap = {100 * num.max_overlap:.0f} %); use "
+                           f"youngs_modulus >= {need:.3g}, or a larger max_overlap")
+    return out
+
+
 def spatial_key(x: np.ndarray, lo, cell: float) -> np.ndarray:
     """Sort key that stores particles cell by cell in the broad phase's cell order (x, then y,
     then z): partners of a particle then sit close in memory, which makes the force loop about
@@ -362,6 +395,9 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         if scales is None or ts.limit < scales.limit:
             scales = ts
     num = scene.numerics
+    soft = _too_soft(scene, law, mats, mat_names, material, radius, np.concatenate(x0), np.concatenate(active0), speed)
+    if soft:
+        raise SceneError(src, soft)
     if num.dt is not None:
         dt = num.dt
         if dt > scales.limit and not num.force_dt:
@@ -410,6 +446,12 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
                 f"heat: the time step {dt:.3g} s exceeds the explicit conduction limit {thermal_limit:.3g} s "
                 "(min over particles of m c / sum of contact conductances); raise materials.*.heat_capacity, "
                 "lower materials.*.conductivity, or lower the time step"])
+    if scene.gas is not None:
+        from tidem.gas import gas_step_checks
+
+        gas_errors = gas_step_checks(scene, dt, radius, density)
+        if gas_errors:
+            raise SceneError(src, gas_errors)
     end = t_end if t_end is not None else num.t_end
     if smoke:
         end = min(end, scene.output.smoke_steps * dt)

@@ -142,7 +142,13 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     out = Output(out_dir, model)
     out.write_summary(summary(model, None, "starting", 0.0))
     t_setup = time.perf_counter()
-    solver = solver or Solver(model)
+    try:
+        solver = solver or Solver(model)
+    except RunError as exc:
+        out.series.close()
+        data = summary(model, None, "failed", 0.0, str(exc))
+        out.write_summary(data)
+        return RunResult(status="failed", out_dir=Path(out_dir), steps=0, wall_s=0.0, message=str(exc), summary=data)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     scene = model.scene

@@ -43,6 +43,30 @@ def hertz_peak_overlap(m_eff: float, r_eff: float, e_star: float, speed: float) 
     return (15.0 * m_eff * speed**2 / (16.0 * e_star * math.sqrt(r_eff))) ** 0.4
 
 
+def wall_impact_overlap(law: str, d: float, density: float, youngs: float, poisson: float, speed: float) -> float:
+    """Peak overlap / radius of a particle hitting a wall of its own material at `speed`:
+    Hertz (m* = m, R* = R, E* = E / (2 (1 - nu^2))) or linear (delta = v sqrt(m / k), k = E d / 2)."""
+    r = 0.5 * d
+    m = density * math.pi / 6.0 * d**3
+    if law == "hertz_mindlin":
+        return hertz_peak_overlap(m, r, youngs / (2.0 * (1.0 - poisson**2)), speed) / r
+    return speed * math.sqrt(m / (0.5 * youngs * d)) / r
+
+
+def weight_overlap(law: str, d: float, density: float, youngs: float, poisson: float, height: float,
+                   gravity: float) -> float:
+    """Overlap / radius of a particle at the bottom of a bed `height` deep, carrying its share
+    of the weight above (solid fraction 0.6, d^2 of bed section, shared by 3 contacts below):
+    F = 0.2 rho g height d^2; Hertz delta = (3 F / (4 E* sqrt(R*)))^(2/3) for a like pair,
+    linear delta = F / k, k = E d / 2."""
+    force = 0.2 * density * gravity * height * d * d
+    r = 0.5 * d
+    if law == "hertz_mindlin":
+        e_star = youngs / (2.0 * (1.0 - poisson**2))
+        return (3.0 * force / (4.0 * e_star * math.sqrt(0.5 * r))) ** (2.0 / 3.0) / r
+    return force / (0.5 * youngs * d) / r
+
+
 def time_scales(law: str, d_min: float, density: float, youngs: float, poisson: float,
                 restitution: float, speed: float) -> TimeScales:
     """Time scales for the lightest particle of a material, against a like particle or a wall."""
