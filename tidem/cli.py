@@ -55,6 +55,7 @@ def scene(
     quiet: Annotated[bool, typer.Option(help="No progress bar")] = False,
     no_render: Annotated[bool, typer.Option("--no-render", help="Skip frames and movie")] = False,
     view: Annotated[bool, typer.Option("--view", help="Show the run in a window while it goes on (space pauses)")] = False,
+    resume: Annotated[Optional[Path], typer.Option(help="Continue the run in this folder from its checkpoint.npz")] = None,
 ):
     """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
     if arch not in ("cpu", "cuda", "vulkan", "auto"):
@@ -71,13 +72,16 @@ def scene(
     model = _model(loaded, smoke=smoke, t_end=t_end)
     from tidem.run import run
 
-    out_dir = out or Path("renders") / model.name
+    if resume is not None and out is not None and out.resolve() != resume.resolve():
+        _fail(f"--out {out} and --resume {resume}: a resumed run writes into the folder it resumes; drop --out", 2)
+    out_dir = resume or out or Path("renders") / model.name
+    checkpoint = _checkpoint(resume, loaded, model) if resume is not None else None
     typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
                f"{f' (+{model.capacity - int(model.active0.sum())} to pour)' if model.pours else ''}, "
                f"dt = {model.dt:.3g} s, t_end = {model.t_end:.4g} s -> {out_dir}", err=True)
     live = _live_view(model) if view else None
     with _background(out_dir, no_render) as background:
-        result = run(model, out_dir, progress=not quiet, on_snapshot=background, view=live)
+        result = run(model, out_dir, progress=not quiet, on_snapshot=background, view=live, resume=checkpoint)
         if live is not None:
             live.close()
         s = result.summary
@@ -89,6 +93,22 @@ def scene(
         _fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
     if result.status == "interrupted":
         _fail(result.message + f"; finished output is in {out_dir}", 130)
+
+
+def _checkpoint(run_dir: Path, loaded, model):
+    """The checkpoint in run_dir, checked against the scene (exit 2 with the reason if not usable)."""
+    from tidem import checkpoint
+
+    try:
+        meta, arrays = checkpoint.load(run_dir)
+        checkpoint.check_scene(meta, loaded.raw, model.features.precision)
+    except checkpoint.CheckpointError as exc:
+        _fail(f"--resume {run_dir}: {exc}", 2)
+    if meta["solver"]["t"] >= model.t_end * (1 - 1e-12):
+        _fail(f"--resume {run_dir}: the checkpoint is at {checkpoint.describe(meta)}, already at or past the end time "
+              f"{model.t_end:.6g} s; raise numerics.t_end (--t-end) to continue", 2)
+    typer.echo(f"tidem: resuming from {checkpoint.describe(meta)}", err=True)
+    return meta, arrays
 
 
 def _live_view(model):

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import json
 import math
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -13,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from tidem import __version__
+from tidem import __version__, checkpoint
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
@@ -35,15 +37,24 @@ class RunResult:
 class Output:
     """Snapshots (vtp + pvd), timeseries.csv and run.json of one run folder."""
 
-    def __init__(self, out_dir: Path, model: Model):
+    def __init__(self, out_dir: Path, model: Model, loop: dict | None = None):
+        """A fresh run folder, or with `loop` (a checkpoint's run-loop state) the folder of the
+        run being resumed: its snapshots and time-series rows up to the checkpoint are kept,
+        anything written after it is dropped."""
         self.dir = Path(out_dir)
         self.snap_dir = self.dir / "snapshots"
         self.snap_dir.mkdir(parents=True, exist_ok=True)
-        for old in [*self.snap_dir.glob("*.vtp"), self.dir / "snapshots.pvd"]:
-            old.unlink(missing_ok=True)
         self.model = model
-        self.entries: list[tuple[float, str]] = []
-        self.series = TimeSeries(self.dir / "timeseries.csv")
+        self.entries: list[tuple[float, str]] = [tuple(e) for e in loop["entries"]] if loop else []
+        kept = {Path(name).name for _, name in self.entries}
+        for old in self.snap_dir.glob("*.vtp"):
+            if old.name not in kept:
+                old.unlink()
+        if self.entries:
+            write_pvd(self.dir / "snapshots.pvd", self.entries)
+        else:
+            (self.dir / "snapshots.pvd").unlink(missing_ok=True)
+        self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
 
     def snapshot(self, solver: Solver) -> Path:
         """Write the next snapshot and list it in snapshots.pvd; returns its file."""
@@ -131,20 +142,65 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
     return out
 
 
+class StopRequest:
+    """SIGINT and SIGTERM ask the run loop to stop at the end of the current step (it then
+    writes a checkpoint and flushes every output); a second Ctrl-C interrupts at once.
+    Handlers are installed only in the main thread and restored on exit."""
+
+    def __init__(self):
+        self.signal: str | None = None
+        self._old = {}
+
+    def _handle(self, signum, frame):
+        if self.signal is not None and signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        self.signal = signal.Signals(signum).name
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for sig, handler in self._old.items():
+            signal.signal(sig, handler)
+        return False
+
+
+def _cadence(scene, t_end: float) -> tuple[float, float]:
+    """(snapshot interval, time-series interval) [s] from the scene's output table."""
+    snap_dt = scene.output.interval or t_end / scene.output.snapshots
+    return snap_dt, scene.output.timeseries_interval or snap_dt / 10.0
+
+
+def _next_after(t: float, every: float) -> float:
+    return (math.floor(t / every + 1e-9) + 1) * every
+
+
 def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | None = None,
-        on_snapshot: Callable[[Path], None] | None = None, view=None) -> RunResult:
+        on_snapshot: Callable[[Path], None] | None = None, view=None, resume: tuple[dict, dict] | None = None
+        ) -> RunResult:
     """Run `model` to its end time, writing to `out_dir`.
 
     `on_snapshot` is called with each snapshot file once it is on disk (the background
     renderer starts on the first); `view` (a `tidem.render.live.LiveView`) is updated after
-    every step. Time the view spends paused is not counted in wall_s.
+    every step. Time the view spends paused is not counted in wall_s. `resume` is a
+    checkpoint (`tidem.checkpoint.load`) of this scene in `out_dir` to continue from.
+    Checkpoints are written every `output.checkpoint_wall_s` of wall time (and every
+    `output.checkpoint_interval` of simulated time if set), at the end, and when SIGINT or
+    SIGTERM stops the run; never after a failure, which keeps the last good one.
     """
-    out = Output(out_dir, model)
-    out.write_summary(summary(model, None, "starting", 0.0))
+    loop = resume[0]["loop"] if resume else None
+    out = Output(out_dir, model, loop)
+    if resume is None:
+        out.write_summary(summary(model, None, "starting", 0.0))
     t_setup = time.perf_counter()
     try:
         solver = solver or Solver(model)
-    except RunError as exc:
+        if resume is not None:
+            checkpoint.restore(solver, *resume)
+    except (RunError, checkpoint.CheckpointError) as exc:
         out.series.close()
         data = summary(model, None, "failed", 0.0, str(exc))
         out.write_summary(data)
@@ -153,20 +209,42 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     setup_s = t0 - t_setup
     scene = model.scene
     t_end = model.t_end
-    snap_dt = scene.output.interval or t_end / scene.output.snapshots
-    series_dt = scene.output.timeseries_interval or snap_dt / 10.0
-    next_snap = 0.0
-    next_series = 0.0
+    output_table = scene.output.model_dump()
+    snap_dt, series_dt = _cadence(scene, t_end)
+    next_snap = next_series = next_ckpt = 0.0
+    wall_before = 0.0
+    if loop is not None:
+        wall_before = loop["wall_s"]
+        if loop["output"] == output_table:
+            snap_dt, series_dt, next_snap, next_series = (loop[k] for k in ("snap_dt", "series_dt", "next_snap",
+                                                                              "next_series"))
+        else:  # new cadence from the last snapshot and sample on
+            next_snap = _next_after(out.entries[-1][0], snap_dt) if out.entries else solver.t
+            next_series = _next_after(loop["last_sample_t"], series_dt)
+    ckpt_every = scene.output.checkpoint_interval
+    if ckpt_every:
+        next_ckpt = _next_after(solver.t, ckpt_every)
+    last_sample_t = loop["last_sample_t"] if loop else -1.0
     total_steps = max(1, math.ceil(t_end / model.dt - 1e-9))
     status, message = "finished", ""
     from tidem.progress import RunProgress
 
+    def save_checkpoint() -> None:
+        state = {"snap_dt": snap_dt, "series_dt": series_dt, "next_snap": next_snap, "next_series": next_series,
+                 "entries": out.entries, "series_rows": out.series.rows, "last_sample_t": last_sample_t,
+                 "output": output_table, "wall_s": wall_before + time.perf_counter() - t0}
+        checkpoint.save(out.dir, solver, state, model.loaded.raw)
+
     bar = RunProgress(enabled=progress, t_end=t_end, particles=int(model.active0.sum()) or model.capacity)
+    last_ckpt = time.perf_counter()
+    in_step = False
+    stop = StopRequest()
     try:
-        with bar:
+        with bar, stop:
             while True:
                 if solver.t >= next_series - 1e-12 * t_end:
                     out.sample(solver)
+                    last_sample_t = solver.t
                     next_series += series_dt
                 if solver.t >= next_snap - 1e-12 * t_end:
                     written = out.snapshot(solver)
@@ -177,20 +255,37 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     view.update(solver)
                 if solver.steps >= total_steps:
                     break
+                in_step = True
                 solver.step()
+                in_step = False
                 if solver.steps % 50 == 0 or solver.steps == total_steps:
                     bar.update(solver.t, solver.steps, time.perf_counter() - t0)
+                if stop.signal is not None:
+                    raise KeyboardInterrupt
+                now = time.perf_counter()
+                if now - last_ckpt >= scene.output.checkpoint_wall_s or (ckpt_every and solver.t >= next_ckpt):
+                    save_checkpoint()
+                    last_ckpt = now
+                    if ckpt_every:
+                        next_ckpt = _next_after(solver.t, ckpt_every)
             solver.check()
+            save_checkpoint()
     except RunError as exc:
         status, message = "failed", str(exc)
     except KeyboardInterrupt:
-        status, message = "interrupted", f"interrupted at t = {solver.t:.6g} s (step {solver.steps})"
+        why = f" by {stop.signal}" if stop.signal not in (None, "SIGINT") else ""
+        status, message = "interrupted", f"interrupted{why} at t = {solver.t:.6g} s (step {solver.steps})"
+        if not in_step:
+            save_checkpoint()
+            message += "; checkpoint written, continue with --resume"
     finally:
         out.series.close()
         if model.angle_bins:
             out.write_alpha_profile(solver)
-        wall = time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
+        wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
         data = summary(model, solver, status, wall, message)
         data["setup_s"] = setup_s
+        if resume is not None:
+            data["resumed_from"] = checkpoint.describe(resume[0])
         out.write_summary(data)
     return RunResult(status=status, out_dir=Path(out_dir), steps=solver.steps, wall_s=wall, message=message, summary=data)

@@ -217,6 +217,8 @@ class Output(Strict):
     snapshots: int = Field(default=50, ge=1)
     timeseries_interval: Positive | None = None
     smoke_steps: int = Field(default=300, ge=1)
+    checkpoint_wall_s: Positive = 600.0
+    checkpoint_interval: Positive | None = None
 
 
 class Heat(Strict):

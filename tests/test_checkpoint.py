@@ -1,0 +1,152 @@
+"""Checkpoint and resume (issue 8): a resumed float64 run is bit-identical to an uninterrupted
+one (snapshots and time series), SIGTERM stops at a step boundary with a checkpoint, a kill
+during the write leaves the previous checkpoint loadable, and an edited scene is refused."""
+
+import os
+import signal
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from tests.conftest import make_scene
+from tidem import checkpoint
+from tidem.cli import app
+from tidem.io.vtp import read_vtp
+from tidem.model import build_model
+from tidem.run import run
+from tidem.scene.load import validate
+from tidem.solver import Solver
+
+SAND = {"density": 2600.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.3, "friction": 0.5,
+        "rolling_friction": 0.1, "conductivity": 3.0, "heat_capacity": 800.0}
+T_END = 0.06
+
+
+def hot_pour(t_end=T_END, **numerics):
+    """Particles poured (random places, seeded) onto a heated floor with a tube: pour RNG,
+    tangential and rolling springs, wall and tube slots and temperatures all carry state."""
+    return make_scene(
+        domain={"min": [0, 0, 0], "max": [0.016, 0.008, 0.03], "periodic": ["x"], "walls": "auto",
+                "gravity": [0, 0, -9.81]},
+        materials={"sand": dict(SAND)},
+        particles=[{"name": "bed", "material": "sand", "diameter": {"distribution": "uniform", "min": 0.0016,
+                                                                     "max": 0.002}, "seed": 5,
+                    "region": {"min": [0, 0, 0.0], "max": [0.016, 0.008, 0.006]}, "temperature": 300.0},
+                   {"name": "poured", "material": "sand", "count": 40, "seed": 9,
+                    "diameter": {"distribution": "mono", "value": 0.002}, "temperature": 400.0,
+                    "pour": {"region": {"min": [0, 0, 0.02], "max": [0.016, 0.008, 0.03]}, "rate": 2000.0}}],
+        tubes=[{"center": [0.008, 0.0, 0.012], "axis": "y", "diameter": 0.004, "temperature": 350.0}],
+        heat={"initial_temperature": 300.0},
+        numerics={"t_end": t_end, "dt_fraction": 0.3, **numerics},
+        output={"interval": 0.01, "timeseries_interval": 0.002},
+    )
+
+
+def snapshots(run_dir):
+    return [read_vtp(p) for p in sorted((run_dir / "snapshots").glob("*.vtp"))]
+
+
+def assert_same_run(a, b):
+    sa, sb = snapshots(a), snapshots(b)
+    assert len(sa) == len(sb) == round(T_END / 0.01) + 1
+    for (pa, da), (pb, db) in zip(sa, sb):
+        assert np.array_equal(pa, pb)
+        assert da.keys() == db.keys()
+        for k in da:
+            assert np.array_equal(da[k], db[k]), k
+    assert (a / "timeseries.csv").read_text() == (b / "timeseries.csv").read_text()
+    assert (a / "snapshots.pvd").read_text() == (b / "snapshots.pvd").read_text()
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("whole")
+    assert run(build_model(validate(hot_pour())), out, progress=False).status == "finished"
+    return out
+
+
+def resume(out, t_end=T_END):
+    loaded = validate(hot_pour(t_end))
+    meta, arrays = checkpoint.load(out)
+    checkpoint.check_scene(meta, loaded.raw, "float64")
+    return run(build_model(loaded), out, progress=False, resume=(meta, arrays))
+
+
+def test_run_to_half_then_resume_is_bit_identical(uninterrupted, tmp_path):
+    first = run(build_model(validate(hot_pour(T_END / 2))), tmp_path, progress=False)
+    assert first.status == "finished" and (tmp_path / "checkpoint.npz").is_file()
+    second = resume(tmp_path)
+    assert second.status == "finished" and second.summary["resumed_from"].startswith("t = 0.03")
+    assert_same_run(uninterrupted, tmp_path)
+
+
+def test_sigterm_checkpoints_at_a_step_boundary_and_resume_is_bit_identical(uninterrupted, tmp_path, monkeypatch):
+    real_step = Solver.step
+
+    def step(self):
+        real_step(self)
+        if self.steps == 777:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr(Solver, "step", step)
+    stopped = run(build_model(validate(hot_pour())), tmp_path, progress=False)
+    assert stopped.status == "interrupted" and "SIGTERM" in stopped.message and stopped.steps == 777
+    monkeypatch.setattr(Solver, "step", real_step)
+    assert checkpoint.load(tmp_path)[0]["solver"]["steps"] == 777
+    assert resume(tmp_path).status == "finished"
+    assert_same_run(uninterrupted, tmp_path)
+
+
+def test_kill_during_checkpoint_write_keeps_the_previous_one(tmp_path, monkeypatch):
+    s = Solver(build_model(validate(hot_pour())))
+    try:
+        loop = {"entries": [], "series_rows": 0}
+        checkpoint.save(tmp_path, s, loop, {"a": 1})
+        before = (tmp_path / "checkpoint.npz").read_bytes()
+        for _ in range(20):
+            s.step()
+
+        def killed(fh, **arrays):
+            fh.write(b"PK\x03\x04 half a zip")
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(np, "savez", killed)
+        with pytest.raises(KeyboardInterrupt):
+            checkpoint.save(tmp_path, s, loop, {"a": 1})
+    finally:
+        s.release()
+    assert (tmp_path / "checkpoint.npz").read_bytes() == before
+    meta, _ = checkpoint.load(tmp_path)
+    assert meta["solver"]["steps"] == 0
+
+
+def test_resume_refuses_an_edited_scene_naming_the_key():
+    raw = hot_pour()
+    edited = hot_pour(0.2)  # a later end time and new output cadence may change
+    edited["output"]["interval"] = 0.02
+    meta = {"scene": raw, "precision": "float64"}
+    checkpoint.check_scene(meta, edited, "float64")
+    edited["materials"]["sand"]["friction"] = 0.3
+    edited["tubes"][0]["temperature"] = 360.0
+    with pytest.raises(checkpoint.CheckpointError) as err:
+        checkpoint.check_scene(meta, edited, "float64")
+    assert "materials.sand.friction" in str(err.value) and "tubes[0].temperature" in str(err.value)
+    with pytest.raises(checkpoint.CheckpointError, match="float32"):
+        checkpoint.check_scene(meta, raw, "float32")
+
+
+def test_cli_resume_refuses_edit_and_continues_a_run(tmp_path):
+    runner = CliRunner()
+    out = tmp_path / "impact"
+    args = ["scene", "sphere_impact", "--quiet", "--no-render"]
+    assert runner.invoke(app, [*args, "--out", str(out), "--t-end", "6e-4"]).exit_code == 0
+    bad = runner.invoke(app, [*args, "--resume", str(out), "--set", "materials.sus304.restitution=0.5"])
+    assert bad.exit_code == 2 and "materials.sus304.restitution" in bad.output
+    done = runner.invoke(app, [*args, "--resume", str(out), "--t-end", "6e-4"])
+    assert done.exit_code == 2 and "already at or past the end time" in done.output
+    ok = runner.invoke(app, [*args, "--resume", str(out)])
+    assert ok.exit_code == 0, ok.output
+    assert "resuming from t = 0.0006" in ok.output
+    missing = runner.invoke(app, [*args, "--resume", str(tmp_path / "nothing")])
+    assert missing.exit_code == 2 and "no checkpoint.npz" in missing.output
