@@ -268,7 +268,8 @@ def check(
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
         f"kernels: {', '.join(f.kernels())}",
-        f"memory (fields): {model.memory_bytes() / 2**20:.1f} MiB, {model.memory_bytes() / model.capacity:.0f} B/particle",
+        f"memory (fields): {model.memory_bytes() / 2**20:.1f} MiB, {model.memory_bytes() / model.capacity:.0f} B/particle; "
+        f"expected peak of a run {model.peak_memory_bytes() / 2**20:.0f} MiB",
     ]
     typer.echo("\n".join(lines))
 

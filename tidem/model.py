@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -111,7 +112,44 @@ class Model:
         if self.features.gas:
             per += fp * (8 + (2 if self.features.heat else 0))
         cells = self.grid.n_cells * 4 * 3
+        if self.features.gas:
+            from tidem.gas import gas_grid
+
+            gas_cells = int(np.prod(gas_grid(self.scene).cells))
+            cells += gas_cells * (fp * (9 + 4 * self.features.heat + 8 * 3) + 4 * 4)
         return per * self.capacity + cells
+
+    def peak_memory_bytes(self) -> int:
+        """Expected peak resident memory of a run [bytes]: the Python + Taichi + LLVM runtime,
+        the Taichi fields, and the host copies of per-particle arrays (scene arrays, snapshot
+        and check read-backs); constants measured on 20k and 126k particle beds."""
+        return RUNTIME_BYTES + self.memory_bytes() + HOST_BYTES_PER_PARTICLE * self.capacity
+
+
+RUNTIME_BYTES = 172 * 2**20  # peak RSS of a run less fields and host arrays (measured, float64 bed of 20k)
+HOST_BYTES_PER_PARTICLE = 1050  # numpy arrays of the scene and of the read-backs (measured, 20k vs 126k)
+
+
+def available_memory_bytes() -> int | None:
+    """MemAvailable of /proc/meminfo [bytes], or None where it cannot be read."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def memory_refusal(model: "Model") -> list[str]:
+    """A message when the run would need more memory than the machine has available."""
+    need, have = model.peak_memory_bytes(), available_memory_bytes()
+    if have is None or need <= have:
+        return []
+    return [f"the run needs about {need / 2**30:.2f} GiB ({model.capacity} particles x "
+            f"{model.memory_bytes() / model.capacity + HOST_BYTES_PER_PARTICLE:.0f} B + "
+            f"{RUNTIME_BYTES / 2**20:.0f} MiB runtime), this machine has {have / 2**30:.2f} GiB available: "
+            "use fewer particles, numerics.precision = \"float32\", or a smaller numerics.max_neighbors"]
 
 
 FLOOR = 0.001  # repulsive floor of the hysteretic law, F >= FLOOR k_l delta (source 3)
@@ -455,7 +493,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     end = t_end if t_end is not None else num.t_end
     if smoke:
         end = min(end, scene.output.smoke_steps * dt)
-    return Model(
+    model = Model(
         name=loaded.name, loaded=loaded, features=features, grid=grid, capacity=len(radius), radius=radius, mass=mass,
         material=material, group=np.concatenate(group), x0=np.concatenate(x0), v0=np.concatenate(v0),
         active0=np.concatenate(active0), pair_params=pair, surface_params=surf, planes=planes, tubes=tubes,
@@ -464,3 +502,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         thermal_limit=thermal_limit,
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(t["T"] for t in tubes) else 0,
     )
+    too_big = memory_refusal(model)
+    if too_big:
+        raise SceneError(src, too_big)
+    return model

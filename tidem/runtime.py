@@ -10,10 +10,12 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import sys
 
 import taichi as ti
 
 _current: tuple[str, str, int] | None = None
+_auto: dict[tuple[str, int], str] = {}  # what 'auto' started, by (precision, threads)
 
 
 class BackendUnavailable(RuntimeError):
@@ -21,27 +23,40 @@ class BackendUnavailable(RuntimeError):
 
 
 def _arch_for(name: str):
-    return {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan, "gpu": ti.gpu}[name]
+    return {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan}[name]
 
 
 def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | None = None) -> str:
     """Initialise Taichi for `arch` ('cpu', 'cuda', 'vulkan' or 'auto') and `precision`.
 
-    Returns the architecture actually started. 'auto' picks a GPU when one is present and
-    otherwise falls back to the CPU, saying so on stderr.
+    Returns the architecture actually started. 'auto' tries CUDA, then Vulkan, and otherwise
+    falls back to the CPU, saying so on stderr (Taichi's own `ti.gpu` probe is not used: it
+    crashes the process on a machine without a GPU or display).
     """
     global _current
     threads = threads or int(os.environ.get("TI_CPU_MAX_NUM_THREADS", os.cpu_count() or 1))
+    if arch == "auto" and (precision, threads) in _auto:
+        return ensure_taichi(_auto[precision, threads], precision, threads)
+    if arch == "auto":
+        for candidate in ("cuda", "vulkan"):
+            try:
+                _auto[precision, threads] = ensure_taichi(candidate, precision, threads)
+                return candidate
+            except BackendUnavailable:
+                pass
+        started = _auto[precision, threads] = ensure_taichi("cpu", precision, threads)
+        print("tidem: no GPU found, running on the CPU", file=sys.stderr)
+        return started
     key = (arch, precision, threads)
     if _current == key:
-        return _current[0] if arch != "auto" else _started_arch()
+        return arch
     if _current is not None:
         ti.reset()
     fp = ti.f64 if precision == "float64" else ti.f32
     buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
+    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
         ti.init(
-            arch=ti.gpu if arch == "auto" else _arch_for(arch),
+            arch=_arch_for(arch),
             default_fp=fp,
             default_ip=ti.i32,
             cpu_max_num_threads=threads,
@@ -49,14 +64,10 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
             log_level=ti.ERROR,
         )
     started = _started_arch()
-    if arch not in ("auto", started):
+    if started != arch:
         ti.reset()
         _current = None
         raise BackendUnavailable(f"Taichi could not start the '{arch}' backend here (got '{started}')")
-    if arch == "auto" and started == "cpu":
-        import sys
-
-        print("tidem: no GPU found, running on the CPU", file=sys.stderr)
     _current = key
     return started
 
