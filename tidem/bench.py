@@ -2,7 +2,7 @@
 
 The bed is the 10 000-sphere column of `benchmarks/settle_bed.toml`, settled by tidem and
 stored in `benchmarks/bed10k.npz`, tiled laterally like `shared/bench/peers/tile_bed.py`
-(10k: 1x1, 50k: 5x1, 200k: 5x4 copies of the 20 d x 20 d column). The run uses the peer
+(10k: 1x1, 50k: 5x1, 200k: 5x4, 1M: 10x10 copies of the 20 d x 20 d column). The run uses the peer
 code's settings: Hertz-Mindlin with tangential history, d = 1 mm, rho = 2600 kg/m3,
 E = 1e7 Pa, nu = 0.3, e = 0.5, mu = 0.5, dt = 1e-6 s, skin 0.1 d, periodic in x and y.
 Particles are stored in cell order (as LAMMPS' atom sorting does). Each case runs in its own process (own Taichi precision and thread count): 300 warm-up
@@ -23,7 +23,7 @@ import numpy as np
 from tidem.model import spatial_key
 
 BED = Path(__file__).resolve().parent.parent / "benchmarks" / "bed10k.npz"
-TILES = {10000: (1, 1), 50000: (5, 1), 200000: (5, 4)}
+TILES = {10000: (1, 1), 50000: (5, 1), 200000: (5, 4), 1000000: (10, 10)}
 COLUMN = 0.02  # m, lateral size of the settled column
 
 

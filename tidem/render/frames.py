@@ -50,6 +50,14 @@ def field_values(field: str, data: dict) -> np.ndarray:
     return np.asarray(data[field], dtype=float)
 
 
+def bar_labels(clim: tuple[float, float]) -> int:
+    """Number of colour-bar labels: one per whole unit for spans of 2-10 units (a 5 K range
+    reads 293, 294, ..., 298), five otherwise."""
+    span = clim[1] - clim[0]
+    whole = round(span)
+    return whole + 1 if 2 <= whole <= 10 and abs(span - whole) < 1e-6 * max(1.0, span) else 5
+
+
 def frame_size(view: str, bounds, height: int = 720) -> tuple[int, int]:
     """Window size that fits the domain's projection, plus room for the colour bar (multiples of 16)."""
     ext = {"front": (bounds[1] - bounds[0], bounds[5] - bounds[4]),
@@ -131,8 +139,9 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
         actor = pl.add_mesh(
             cloud, scalars="values", style="points_gaussian", render_points_as_spheres=True, emissive=False,
             cmap=style.colormap, clim=style.clim,
-            scalar_bar_args=dict(title=title, fmt="%.3g", color="black", vertical=True,
-                                 position_x=0.86, position_y=0.15, height=0.7, width=0.05),
+            scalar_bar_args=dict(title=title, fmt="%.3g", color="black", vertical=True, n_labels=bar_labels(style.clim),
+                                 position_x=0.80, position_y=0.15, height=0.7, width=0.05,
+                                 title_font_size=15, label_font_size=14),
         )
         actor.mapper.scale_array = "radius"
         actor.mapper.scale_factor = 1.0
@@ -145,7 +154,7 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
             cyl = pv.Cylinder(center=centre, direction=axis.astype(float), radius=t["r"], height=length, resolution=64)
             pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color=tube_colour(t, style), lighting=False)
     pl.add_mesh(pv.Box(bounds=style.bounds).outline(), color="black", line_width=1)
-    pl.add_text(f"t = {time:.4g} s", position="upper_left", font_size=12, color="black")
+    pl.add_text(f"t = {time:.4g} s", position=(12, style.size[1] - 34), font_size=12, color="black")
     place_camera(pl, style)
     tmp = Path(out_png).with_name("." + Path(out_png).name)  # a stopped render leaves no half-written frame
     pl.screenshot(str(tmp))
