@@ -18,17 +18,22 @@ import taichi as ti
 
 from .contact_laws import make_contact_response
 from .geometry import make_geometry
-from .heat import spot_conductance, wall_conductance
+from .heat import pfp_conductance, spot_conductance, wall_conductance
 
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
-                      angle_bins: int = 0):
+                      angle_bins: int = 0, fluid_layer: float = 0.0):
     """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
     the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
     with `angle_bins` the heat flow from each tube by angle omega of the contact point from the
-    top of the tube, tube_bin_rate[k, b] (omega = atan2(side, up), 0 = top, 180 deg = bottom)."""
+    top of the tube, tube_bin_rate[k, b] (omega = atan2(side, up), 0 = top, 180 deg = bottom).
+    `fluid_layer` > 0 adds particle-fluid-particle conduction between neighbours closer than
+    fluid_layer * min(r_i, r_j), touching or not, and between a surface with a temperature and
+    a particle within fluid_layer * r_i of it that does not touch it (R* = r_i; a touching one
+    conducts by Schluender's coefficient instead)."""
+    pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
@@ -63,6 +68,18 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 delta = r + S.tube_r[k] - dist
                 n = -d / dist
         return delta, n, u
+
+    @ti.func
+    def surface_heat(s: ti.template(), nrm, flow):
+        """Book a particle's heat flow from surface s, and from a tube by angle of the contact point."""
+        ti.atomic_add(S.surf_rate[s], flow)
+        if ti.static(angle_bins > 0 and s >= n_planes):
+            off = -nrm
+            omega = ti.atan2(off.dot(S.tube_side[s - n_planes]), off[2])
+            if omega < 0.0:
+                omega += 2.0 * 3.141592653589793
+            b = ti.min(ti.cast(omega / (2.0 * 3.141592653589793) * angle_bins, ti.i32), angle_bins - 1)
+            ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.kernel
     def compute_forces(n: ti.i32, t: float, dt: float):
@@ -121,7 +138,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         S.ft[i, k] = xi_new
                         if ti.static(heat):
                             p_pair = p_same if ti.static(single_material) else S.pp[mat_i, S.mat[j]]
-                            heat_in += spot_conductance(p_pair, r_eff, delta) * (S.T[j] - S.T[i])
+                            h_pair = spot_conductance(p_pair, r_eff, delta)
+                            if ti.static(pfp):
+                                h_pair += pfp_conductance(p_pair, r_eff, -delta, fluid_layer * ti.min(ri, rj))
+                            heat_in += h_pair * (S.T[j] - S.T[i])
                         if ti.static(rolling):
                             S.mr[i, k] = mr_new
                         if ti.static(hysteretic):
@@ -129,6 +149,12 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         worst = ti.max(worst, delta / ti.min(ri, rj))
                         touching += 1
                     else:
+                        if ti.static(pfp):
+                            gap = ti.sqrt(dist2) - rsum
+                            if gap < fluid_layer * ti.min(ri, rj):
+                                p_pair = p_same if ti.static(single_material) else S.pp[mat_i, S.mat[j]]
+                                h_gas = pfp_conductance(p_pair, ri * rj / rsum, gap, fluid_layer * ti.min(ri, rj))
+                                heat_in += h_gas * (S.T[j] - S.T[i])
                         S.ft[i, k] = zero3
                         if ti.static(rolling):
                             S.mr[i, k] = zero3
@@ -174,24 +200,22 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                                 if S.surf_T[s] > 0.0:
                                     flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (S.surf_T[s] - S.T[i])
                                     heat_in += flow
-                                    ti.atomic_add(S.surf_rate[s], flow)
-                                    if ti.static(angle_bins > 0 and s >= n_planes):
-                                        off = -nrm
-                                        omega = ti.atan2(off.dot(S.tube_side[s - n_planes]), off[2])
-                                        if omega < 0.0:
-                                            omega += 2.0 * 3.141592653589793
-                                        b = ti.min(ti.cast(omega / (2.0 * 3.141592653589793) * angle_bins, ti.i32),
-                                                   angle_bins - 1)
-                                        ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
+                                    surface_heat(s, nrm, flow)
                             if ti.static(rolling):
                                 S.wmr[i, slot] = mr_new
                             if ti.static(hysteretic):
                                 S.wdmax[i, slot] = dmax_new
                             worst = ti.max(worst, delta / ri)
                             touching += 1
-                    elif slot >= 0:
-                        S.wid[i, slot] = -1
-                        held &= ~(1 << s)
+                    else:
+                        if slot >= 0:
+                            S.wid[i, slot] = -1
+                            held &= ~(1 << s)
+                        if ti.static(pfp):
+                            if -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
+                                flow = pfp_conductance(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (S.surf_T[s] - S.T[i])
+                                heat_in += flow
+                                surface_heat(s, nrm, flow)
                 S.wmask[i] = held
                 S.f[i] = force
                 S.tq[i] = torque

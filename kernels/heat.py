@@ -10,6 +10,13 @@
   lambda_g the gas conductivity, l the gas mean free path, h_R the roughness; a touching
   particle exchanges H = alpha_WP pi d^2 / 4 (its share of the wall at full coverage) in
   addition to the solid contact spot 2 k a.
+* Particle-fluid-particle (Rong & Horio 1999, source 1; lens of Zhou, Yu & Zulli 2009):
+  between neighbours, touching or not, through the gas lens where the gap
+  s(r) = h + r^2 / (2 R*) (h the surface gap) is below delta_f = fluid_layer * min(r_i, r_j),
+  with a minimum gap s_min (mean free path + roughness):
+      H = int 2 pi lambda_g r dr / max(s, s_min)
+        = 2 pi lambda_g R* [(max(s_min, s0) - s0) / s_min + ln(delta_f / max(s_min, s0))],
+  s0 = max(h, 0), and 0 for h >= delta_f.
 The heat rate into particle i is q_i = sum_j H_ij (T_j - T_i) + sum_walls H_iw (T_w - T_i);
 a pair's H is computed identically from both sides, so the pair terms cancel exactly and
 an isolated bed keeps its heat to rounding.
@@ -26,6 +33,27 @@ def schluender_alpha_wp(lambda_gas, d, gap):
     d = np.asarray(d, dtype=float)
     x = 2.0 * gap / d
     return 4.0 * lambda_gas / d * ((1.0 + x) * np.log(1.0 + 1.0 / x) - 1.0)
+
+
+def pfp_conductance_np(lambda_gas, r_eff, gap, s_min, delta_f):
+    """Particle-fluid-particle conductance [W/K] (numpy; the closed form in the docstring)."""
+    s0 = max(gap, 0.0)
+    if s0 >= delta_f:
+        return 0.0
+    lo = max(s_min, s0)
+    return 2.0 * np.pi * lambda_gas * r_eff * ((lo - s0) / s_min + np.log(delta_f / lo))
+
+
+@ti.func
+def pfp_conductance(p, r_eff, gap, delta_f):
+    """Particle-fluid-particle conductance [W/K] through the gas lens (see the module docstring)."""
+    s_min = p[GAP]
+    s0 = ti.max(gap, 0.0)
+    h = 0.0
+    if s0 < delta_f:
+        lo = ti.max(s_min, s0)
+        h = 2.0 * 3.141592653589793 * p[LAMBDA_GAS] * r_eff * ((lo - s0) / s_min + ti.log(delta_f / lo))
+    return h
 
 
 @ti.func

@@ -91,6 +91,8 @@ class Model:
     heat_capacity: np.ndarray | None = None
     thermal_limit: float | None = None
     angle_bins: int = 0
+    fluid_layer: float = 0.0  # particle-fluid-particle lens thickness / smaller radius (0: off)
+    heat_reach: float = 0.0  # extra neighbour-list reach for that lens [m]
 
     @property
     def scene(self):
@@ -260,7 +262,8 @@ def _surfaces(scene, default_mat: str):
 def _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors) -> float:
     """Stability limit of the explicit temperature update: min over particles of m c / H_sum,
     with H_sum the conductance of a full row of contacts at the largest allowed overlap
-    (contact spot 2 k a, a = sqrt(R* delta)) plus one wall contact (alpha_WP pi d^2 / 4)."""
+    (contact spot 2 k a, a = sqrt(R* delta)) plus one wall contact (alpha_WP pi d^2 / 4), and
+    with particle-fluid-particle conduction up to 20 neighbours at its touching value."""
     from tidem.kernels.heat import schluender_alpha_wp
 
     h = scene.heat
@@ -269,6 +272,10 @@ def _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neigh
     a = np.sqrt(0.5 * radius * delta)
     wall = schluender_alpha_wp(h.gas_conductivity, 2 * radius, h.gas_mean_free_path + h.roughness) * np.pi * radius**2
     conductance = min(max_neighbors, 12) * 2 * k * a + wall + 2 * k * np.sqrt(radius * delta)
+    if h.fluid_layer > 0:  # every neighbour in the lens at the smallest gap
+        s_min = h.gas_mean_free_path + h.roughness
+        lens = 2 * np.pi * h.gas_conductivity * 0.5 * radius * (1 + np.log(np.maximum(h.fluid_layer * radius / s_min, 1)))
+        conductance += min(max_neighbors, 20) * lens
     return float(np.min(heat_cap / np.maximum(conductance, 1e-300)))
 
 
@@ -453,13 +460,15 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     d_max = max_diameter(scene)
     d_min = 2.0 * radius.min()
     skin = num.skin * d_max
-    reach = d_max + skin
+    fluid_layer = scene.heat.fluid_layer if scene.heat is not None else 0.0
+    heat_reach = 0.5 * fluid_layer * d_max
+    reach = d_max + skin + heat_reach
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
     while np.prod(cells) > max(64 * len(radius), 1 << 20):  # sparse, huge domains: coarser cells
         cells = [max(3 if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
     grid = Grid(lo=tuple(dom.min), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
     ratio = d_max / d_min
-    k = num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + num.skin) ** 3))
+    k = num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + num.skin + 0.5 * fluid_layer) ** 3))
 
     features = Features(
         law=cl.LAW_IDS[law],
@@ -478,6 +487,9 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         c = np.array([mats[m].heat_capacity or 0.0 for m in mat_names])[material]
         heat_cap = mass * c
         temperature0 = np.concatenate(temp0)
+        if scene.heat.fluid_layer > 0 and scene.heat.gas_mean_free_path + scene.heat.roughness <= 0:
+            raise SceneError(src, ["heat.roughness: gas conduction between neighbours needs a smallest gap "
+                                   "gas_mean_free_path + roughness > 0 (got 0); set roughness (e.g. 1e-6) or fluid_layer = 0"])
         thermal_limit = _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, k)
         if dt > thermal_limit:
             raise SceneError(src, [
@@ -499,7 +511,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         active0=np.concatenate(active0), pair_params=pair, surface_params=surf, planes=planes, tubes=tubes,
         pours=pours, dt=dt, scales=scales, skin=skin, max_neighbors=k, wall_slots=num.max_wall_contacts,
         t_end=end, gravity=tuple(dom.gravity), fixed=fixed, temperature0=temperature0, heat_capacity=heat_cap,
-        thermal_limit=thermal_limit,
+        thermal_limit=thermal_limit, fluid_layer=fluid_layer, heat_reach=heat_reach,
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(t["T"] for t in tubes) else 0,
     )
     too_big = memory_refusal(model)

@@ -40,10 +40,11 @@ class Solver:
         self.t = 0.0
         self.steps = 0
         self.rebuilds = 0
-        self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin, f.rolling, f.hysteretic, S)
+        self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach, f.rolling,
+                                              f.hysteretic, S)
         self._forces = make_force_kernel(model.grid, f.law, f.rolling, f.n_planes, f.n_tubes, model.wall_slots,
                                          model.gravity, S, f.contact_time, model.pair_params.shape[0] == 1,
-                                         f.heat, model.angle_bins)
+                                         f.heat, model.angle_bins, model.fluid_layer)
         self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
                                                         model.angle_bins)
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.kernels.heat import schluender_alpha_wp
+from tidem.kernels.heat import pfp_conductance_np, schluender_alpha_wp
 
 STEEL = {"density": 7800.0, "youngs_modulus": 2e9, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.3,
          "conductivity": 16.0, "heat_capacity": 500.0}
@@ -35,6 +35,7 @@ def test_two_fixed_spheres_relax_as_the_lumped_solution(solver_for):
     s = solver_for(raw)
     m = 7800 * 4 / 3 * math.pi * R**3
     h = 2 * 16.0 * math.sqrt(R / 2 * overlap)  # Batchelor & O'Brien, a = sqrt(R* delta)
+    h += pfp_conductance_np(0.026, R / 2, -overlap, 1e-6 + 6.8e-8, 0.4 * R)  # and the gas lens around the spot
     rate = h * 2 / (m * 500.0)
     for _ in range(2000):
         s.step()
@@ -44,6 +45,47 @@ def test_two_fixed_spheres_relax_as_the_lumped_solution(solver_for):
     assert T[0] - T[1] == pytest.approx(expected, rel=0.01)
     assert T.mean() == pytest.approx(358.15, rel=1e-12)
     assert np.allclose(s.state.x.to_numpy()[:, 0], [-R + overlap / 2, R - overlap / 2])
+
+
+@pytest.mark.parametrize("gap", [-1e-5, 0.0, 5e-7, 2e-5, 1e-3])
+def test_pfp_closed_form_is_the_lens_integral(gap):
+    """H = int 2 pi k r dr / max(s, s_min), s = gap + r^2 / (2 R*), over s < delta_f (midpoint rule)."""
+    k, r_eff, s_min, delta_f = 0.026, 0.0025, 1.068e-6, 0.002
+    r0 = math.sqrt(max(0.0, -2 * r_eff * gap))
+    r1 = math.sqrt(max(0.0, 2 * r_eff * (delta_f - gap)))
+    r = np.linspace(r0, r1, 2_000_001)
+    mid = 0.5 * (r[1:] + r[:-1])
+    s = np.maximum(gap + mid**2 / (2 * r_eff), s_min)
+    integral = float(np.sum(2 * np.pi * k * mid / s * np.diff(r)))
+    assert pfp_conductance_np(k, r_eff, gap, s_min, delta_f) == pytest.approx(integral, rel=1e-4)
+
+
+def test_spheres_apart_exchange_heat_through_the_gas_lens(solver_for):
+    """Two fixed spheres 20 um apart: only the gas lens conducts; lumped two-body solution."""
+    gap = 2e-5
+    raw = make_scene(
+        materials={"steel": STEEL},
+        particles=[{"name": "hot", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[-R - gap / 2, 0, 0]], "temperature": 423.15, "fixed": True},
+                   {"name": "cold", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[R + gap / 2, 0, 0]], "temperature": 293.15, "fixed": True}],
+        heat={},
+        numerics={"dt": 1.0, "force_dt": True},
+    )
+    s = solver_for(raw)
+    m = 7800 * 4 / 3 * math.pi * R**3
+    h = pfp_conductance_np(0.026, R / 2, gap, 1e-6 + 6.8e-8, 0.4 * R)
+    rate = h * 2 / (m * 500.0)
+    for _ in range(2000):
+        s.step()
+    T = s.state.T.to_numpy()
+    assert s.t * rate > 0.2
+    assert T[0] - T[1] == pytest.approx(130.0 * math.exp(-rate * s.t), rel=0.01)
+    raw["heat"] = {"fluid_layer": 0.0}
+    s = solver_for(raw)
+    for _ in range(10):
+        s.step()
+    assert np.array_equal(s.state.T.to_numpy(), [423.15, 293.15]), "fluid_layer = 0 turns the gas path off"
 
 
 def test_isolated_bed_keeps_its_heat(solver_for):
@@ -107,6 +149,12 @@ def test_wall_contact_conductance_matches_the_formula(solver_for):
     s = solver_for(raw)
     h = 2 * 16.0 * math.sqrt(R * overlap) + schluender_alpha_wp(0.03, 2 * R, 2.07e-6) * math.pi * R**2
     assert s.state.q.to_numpy()[0] == pytest.approx(h * 100.0, rel=1e-9)
+    gap = 1e-4  # apart from the wall: the gas lens with R* = r (a wall is a sphere of infinite radius)
+    raw["particles"][0]["positions"] = [[0, 0, -0.1 + R + gap]]
+    s = solver_for(raw)
+    h = pfp_conductance_np(0.03, R, gap, 2.07e-6, 0.4 * R)
+    assert h > 0 and s.state.q.to_numpy()[0] == pytest.approx(h * 100.0, rel=1e-9)
+    assert s.state.surf_rate.to_numpy()[0] == pytest.approx(h * 100.0, rel=1e-9)
 
 
 def test_unstable_thermal_step_is_refused():

@@ -228,6 +228,7 @@ class Heat(Strict):
     gas_conductivity: Positive = 0.026
     gas_mean_free_path: NonNegative = 6.8e-8
     roughness: NonNegative = 1e-6
+    fluid_layer: Number = Field(default=0.4, ge=0.0, le=1.0)
     angle_bins: int = Field(default=36, ge=4, le=720)
     profile_start: NonNegative = 0.0
 
