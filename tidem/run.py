@@ -103,6 +103,17 @@ class Output:
         tmp.replace(path)
 
 
+def distributor_parts(scene) -> list[dict]:
+    """The gas distributor for the frames: the background inflow, then each nozzle."""
+    gas = scene.gas
+    if gas is None:
+        return []
+    parts = [{"background": True, "velocity": gas.inlet_velocity}]
+    parts += [{"x": list(nz.x), "y": list(nz.y) if nz.y is not None else None, "velocity": nz.velocity}
+              for nz in gas.nozzles]
+    return parts
+
+
 def summary(model: Model, solver: Solver | None, status: str, wall: float, message: str = "") -> dict:
     steps = solver.steps if solver else 0
     n = int(model.active0.sum()) if solver is None else int(solver.state.active.to_numpy().sum())
@@ -133,6 +144,7 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
             "bounds": [v for a in range(3) for v in (model.scene.domain.min[a], model.scene.domain.max[a])],
             "periodic": list(model.grid.periodic),
             "tubes": [{"c": t["c"], "mask": t["mask"], "r": t["r"], "T": t["T"]} for t in model.tubes],
+            "distributor": distributor_parts(model.scene),
         },
     }
     if solver is not None and f.contact_time:

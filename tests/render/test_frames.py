@@ -127,3 +127,25 @@ def test_heated_tube_takes_its_temperature_colour(tmp_path):
         counts[field] = int(((img[:, 0] > 200) & (img[:, 1] > 150) & (img[:, 2] < 200)).sum())
     assert counts["temperature"] > 2000, "pale-yellow (hot) tube pixels"
     assert counts["speed"] < 100, "a grey tube when frames show speed"
+
+
+def test_distributor_nozzle_is_drawn_under_its_part_of_the_floor(tmp_path):
+    import imageio.v2 as imageio
+
+    snap = tmp_path / "s.vtp"
+    write_vtp(snap, np.array([[0.1, 0.01, 0.05]]), {"radius": np.array([0.005]), "velocity": np.zeros((1, 3))})
+    style = FrameStyle(field="speed", clim=(0.0, 1.0), colormap="viridis", size=frame_size("front", BOUNDS),
+                       view="front", bounds=BOUNDS, tubes=[],
+                       distributor=[{"background": True, "velocity": 0.3},
+                                    {"x": [0.15, 0.2], "y": None, "velocity": 1.2}])
+    png = tmp_path / "f.png"
+    render_frame(snap, 0.0, style, png)
+    rgb = imageio.imread(png)[:, :, :3].astype(int)
+    grey = np.argwhere(np.abs(rgb - [176, 176, 176]).sum(axis=2) < 12)
+    blue = np.argwhere(np.abs(rgb - [31, 59, 143]).sum(axis=2) < 12)
+    assert len(blue) > 100
+    grey = grey[np.isin(grey[:, 0], blue[:, 0])]  # the bar's rows
+    assert len(grey) > 200
+    left, right = grey[:, 1].min(), max(grey[:, 1].max(), blue[:, 1].max())
+    assert blue[:, 1].min() > left + 0.7 * (right - left), "the nozzle sits at the right quarter of the floor"
+    assert abs(blue[:, 0].mean() - grey[:, 0].mean()) < 3, "on the same bar below the floor"

@@ -10,7 +10,7 @@ outline, and the simulated time as a stamp.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field as dc_field
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +40,7 @@ class FrameStyle:
     tubes: list[dict]
     periodic: tuple[bool, bool, bool] = (False, False, False)
     slice_thickness: float | None = None
+    distributor: list[dict] = dc_field(default_factory=list)  # gas inlet parts: x, y ranges [m], velocity [m/s]
 
 
 def field_values(field: str, data: dict) -> np.ndarray:
@@ -48,6 +49,22 @@ def field_values(field: str, data: dict) -> np.ndarray:
     if field not in data:
         raise KeyError(f"the snapshots have no '{field}' array; available: speed, {', '.join(sorted(data))}")
     return np.asarray(data[field], dtype=float)
+
+
+def distributor_boxes(style: FrameStyle) -> list[dict]:
+    """A bar under the floor for each part of the gas distributor: grey for the background
+    inflow, dark blue for nozzles faster than it, light for closed parts (velocity 0); 2 % of
+    the domain height thick."""
+    lo, hi = style.bounds[0::2], style.bounds[1::2]
+    thick = 0.02 * (hi[2] - lo[2])
+    base = min((p["velocity"] for p in style.distributor if p.get("background")), default=0.0)
+    out = []
+    for p in style.distributor:
+        x = p.get("x") or (lo[0], hi[0])
+        y = p.get("y") or (lo[1], hi[1])
+        colour = "#b0b0b0" if p.get("background") else ("#1f3b8f" if p["velocity"] > base else "#e6e6e6")
+        out.append({"bounds": (x[0], x[1], y[0], y[1], lo[2] - thick, lo[2]), "colour": colour})
+    return out
 
 
 def bar_labels(clim: tuple[float, float]) -> int:
@@ -153,6 +170,8 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
             centre[axis] = 0.5 * (lo + hi)[axis]
             cyl = pv.Cylinder(center=centre, direction=axis.astype(float), radius=t["r"], height=length, resolution=64)
             pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color=tube_colour(t, style), lighting=False)
+    for part in distributor_boxes(style):
+        pl.add_mesh(pv.Box(bounds=part["bounds"]), color=part["colour"], lighting=False)
     pl.add_mesh(pv.Box(bounds=style.bounds).outline(), color="black", line_width=1)
     pl.add_text(f"t = {time:.4g} s", position=(12, style.size[1] - 34), font_size=12, color="black")
     place_camera(pl, style)

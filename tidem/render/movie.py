@@ -60,7 +60,7 @@ def style_for(run_dir: Path, field: str | None = None, clim=None, view: str | No
     bounds = tuple(geo["bounds"])
     return FrameStyle(field=field, clim=tuple(clim), colormap=settings.get("colormap") or FIELDS[field][1],
                       size=frame_size(view, bounds, settings.get("height", 720)), view=view, bounds=bounds,
-                      tubes=geo["tubes"], periodic=tuple(geo["periodic"]),
+                      tubes=geo["tubes"], periodic=tuple(geo["periodic"]), distributor=geo.get("distributor", []),
                       slice_thickness=slice_thickness if slice_thickness is not None else settings.get("slice"))
 
 
