@@ -20,7 +20,13 @@ the top is a pressure outlet (p = 0 on the face); other box sides and faces of s
 (cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
 periodic axes wrap.
 Gas energy (upwind finite volume, particle exchange implicit, so stable for any exchange rate):
-  rho c [eps^{n+1} T^{n+1} - eps^n T^n] V / dt + rho c sum_f (eps u)_f A_f T_up = HT - H T^{n+1}.
+  rho c [eps^{n+1} T^{n+1} - eps^n T^n] V / dt + rho c sum_f (eps u)_f A_f T_up
+      = HT - H T^{n+1} + H_w (T_w - T^{n+1}),
+with H_w = h_w eps A_w the convection from a heated tube over the tube area A_w the cell
+borders (`tube_convection`): h_w = Nu k_g / D, Churchill & Bernstein (1977) for a cylinder in
+cross flow, Nu = 0.3 + 0.62 Re^1/2 Pr^1/3 / [1 + (0.4/Pr)^2/3]^1/4 [1 + (Re/282000)^5/8]^4/5,
+Re = rho |u| D / mu at the cell's gas velocity. The heat each tube gives the gas is summed
+into wall_rate [W] and, over time, wall_energy [J].
 """
 
 import taichi as ti
@@ -30,8 +36,10 @@ from .gas_grid import make_cic
 CLOSED, INTERIOR, INLET, OUTLET = 0, 1, 2, 3
 
 
-def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0):
-    """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas`)."""
+def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
+                      tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7):
+    """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas`); `tube_walls`
+    adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy)."""
     cic, corner, weight = make_cic(gg)
     n = gg.cells
     per = gg.periodic
@@ -310,9 +318,27 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                 ti.atomic_max(worst, ti.abs(U[c][I]) * dt / h[c])
         return worst
 
+    pr3 = prandtl ** (1.0 / 3.0)
+    cb_denominator = (1.0 + (0.4 / prandtl) ** (2.0 / 3.0)) ** 0.25
+
+    @ti.func
+    def wall_conductance(I):
+        """H_w = h_w eps A_w [W/K] of a cell bordering a heated tube (Churchill-Bernstein)."""
+        speed2 = 0.0
+        for c in ti.static(range(3)):
+            uc = 0.5 * (U[c][face_index(I, c)] + U[c][face_index(I + unit(c), c)])
+            speed2 += uc * uc
+        d = G.wall_D[I]
+        re = rho * ti.sqrt(speed2) * d / mu
+        nu_w = 0.3 + 0.62 * ti.sqrt(re) * pr3 / cb_denominator * (1.0 + (re / 282000.0) ** 0.625) ** 0.8
+        return nu_w * k_gas / d * G.eps[I] * G.wall_A[I]
+
     @ti.kernel
     def energy(dt: ti.f64, t_in: ti.f64):
-        """Upwind advection of eps T with implicit particle exchange (module docstring)."""
+        """Upwind advection of eps T with implicit particle and tube exchange (module docstring)."""
+        if ti.static(tube_walls):
+            for k in G.wall_rate:
+                G.wall_rate[k] = 0.0
         for I in ti.grouped(G.T):
             G.T_new[I] = G.T[I]
             if G.solid[I] == 0:
@@ -337,8 +363,17 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                                     nb = I + e
                                 t_up = G.T[cell_index(nb)]
                             net += flux * t_up
-                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * G.HT[I]) \
-                    / (rho_c * G.eps[I] * vol + dt * G.H[I])
+                hw = 0.0
+                if ti.static(tube_walls):
+                    if G.wall_A[I] > 0.0:
+                        hw = wall_conductance(I)
+                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw * G.wall_T[I])) \
+                    / (rho_c * G.eps[I] * vol + dt * (G.H[I] + hw))
+                if ti.static(tube_walls):
+                    if hw > 0.0:
+                        flow = hw * (G.wall_T[I] - G.T_new[I])
+                        ti.atomic_add(G.wall_rate[G.wall_k[I]], flow)
+                        ti.atomic_add(G.wall_energy[G.wall_k[I]], dt * flow)
         for I in ti.grouped(G.T):
             G.T[I] = G.T_new[I]
 

@@ -53,6 +53,43 @@ def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
     return solid.reshape(gg.cells)
 
 
+def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
+    """Per cell, the surface of a heated tube that the cell borders, for gas-tube convection:
+    wall_A [m^2] (the faces it shares with that tube's solid cells, scaled so that each tube's
+    cells add up to pi D L), wall_T [K], wall_D [m] and wall_k (tube index); None when no
+    heated tube has solid cells."""
+    idx = np.indices(gg.cells).reshape(3, -1).T
+    centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
+    face_area = [gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]]
+    area = np.zeros(gg.cells)
+    out = {"wall_T": np.zeros(gg.cells), "wall_D": np.ones(gg.cells), "wall_k": np.zeros(gg.cells, np.int32)}
+    for k, t in enumerate(tubes):
+        if t["T"] is None:
+            continue
+        d = (centres - np.asarray(t["c"])) * np.asarray(t["mask"])
+        inside = (np.einsum("ij,ij->i", d, d) < t["r"] ** 2).reshape(gg.cells)
+        if not inside.any():
+            continue
+        borders = np.zeros(gg.cells)
+        for a in range(3):
+            for shift in (1, -1):
+                nb = np.roll(inside, shift, axis=a)
+                if not gg.periodic[a]:  # no wrap-around on open axes
+                    edge = [slice(None)] * 3
+                    edge[a] = 0 if shift == 1 else -1
+                    nb[tuple(edge)] = False
+                borders += (nb & ~inside) * face_area[a]
+        axis = int(np.flatnonzero(np.asarray(t["mask"]) == 0.0)[0])
+        true_area = 2 * np.pi * t["r"] * gg.cells[axis] * gg.h[axis]
+        mine = borders > 0
+        area[mine] += borders[mine] * true_area / borders.sum()
+        out["wall_T"][mine], out["wall_D"][mine], out["wall_k"][mine] = t["T"], 2 * t["r"], k
+    if not area.any():
+        return None
+    out["wall_A"] = area
+    return out
+
+
 def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:
     """Per face component: CLOSED, INTERIOR, INLET (bottom) or OUTLET (top)."""
     kinds = []
@@ -145,6 +182,7 @@ class GasPhase:
         self.dt = gas.coupling_interval * model.dt
         self.tol = max(gas.tolerance, 1e-5 if fp == ti.f32 else 0.0)
         self.solid = solid_cells(gg, model.tubes)
+        self.tubes = model.tubes
         self.kinds = face_kinds(gg, self.solid)
         self.inlet = inlet_map(gg, gas)
         G = SimpleNamespace()
@@ -167,16 +205,31 @@ class GasPhase:
         fb.dense(ti.ij, gg.cells[:2]).place(G.inlet)
         G.sums = ti.field(fp)
         fb.dense(ti.i, 2).place(G.sums)
+        walls = tube_walls(gg, model.tubes) if self.heat and gas.tube_convection != "none" else None
+        self.walls = walls is not None
+        if walls is not None:
+            for name in ("wall_A", "wall_T", "wall_D"):
+                setattr(G, name, ti.field(fp))
+                fb.dense(ti.ijk, gg.cells).place(getattr(G, name))
+            G.wall_k = ti.field(ti.i32)
+            fb.dense(ti.ijk, gg.cells).place(G.wall_k)
+            G.wall_rate = ti.field(fp)
+            G.wall_energy = ti.field(ti.f64)
+            fb.dense(ti.i, len(model.tubes)).place(G.wall_rate, G.wall_energy)
         self._tree = fb.finalize()
         self.G = G
         G.solid.from_numpy(self.solid)
+        if walls is not None:
+            for name, values in walls.items():
+                getattr(G, name).from_numpy(values)
         for c in range(3):
             G.kind[c].from_numpy(self.kinds[c])
         G.eps.fill(1.0)
         G.eps_old.fill(1.0)
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
-                                      gas.density * gas.heat_capacity)
+                                      gas.density * gas.heat_capacity, self.walls, k_gas,
+                                      gas.heat_capacity * gas.viscosity / k_gas)
         self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas)
@@ -278,6 +331,11 @@ class GasPhase:
         if self.heat:
             T = self.G.T.to_numpy()[self.solid == 0]
             out["gas_T_mean_K"] = float(T.mean())
+        if self.walls:
+            rate = self.G.wall_rate.to_numpy()
+            for k, tube in enumerate(self.tubes):
+                if tube["T"] is not None:
+                    out[f"tubes{k}_gas_heat_W"] = float(rate[k])
         return out
 
     def release(self) -> None:

@@ -52,7 +52,8 @@ class Features:
         if self.contact_time:
             out.append("contact-time observer")
         if self.heat:
-            out.append("heat (contact-spot conduction, wall/tube conduction after Schluender)")
+            out.append("heat (contact-spot conduction, gas-lens conduction between neighbours, "
+                       "wall/tube conduction after Schluender)")
         if self.gas:
             out.append("gas (voidage, drag, pressure projection" + (", gas energy)" if self.heat else ")"))
         return out

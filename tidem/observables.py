@@ -43,11 +43,13 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
     """Local heat-transfer coefficient around each heated tube (source 3 eq. 34-36, ring
     sectors): alpha(omega) = q(omega) / (T_wall - T_ref), q the time-averaged heat flux
     through the sector of angle omega from the top of the tube since heat.profile_start,
-    T_ref = heat.initial_temperature (the temperature the bed enters with).
+    T_ref = heat.initial_temperature (the temperature the bed enters with). With gas-tube
+    convection the mean alpha adds the tube's heat to the gas (gas_alpha) to the particles'.
     Returns (rows of tube, angle_deg, alpha, and the mean alpha per tube)."""
     if not model.angle_bins or solver.profile_t0 is None or solver.t <= solver.profile_t0:
         return [], []
     energy = solver.state.tube_bin_energy.to_numpy()
+    gas_energy = solver.gas.G.wall_energy.to_numpy() if solver.gas is not None and solver.gas.walls else None
     span = solver.t - solver.profile_t0
     t_ref = model.scene.heat.initial_temperature
     rows, means = [], []
@@ -62,6 +64,11 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
         for b in range(bins):
             rows.append({"tube": k, "angle_deg": (b + 0.5) * 360.0 / bins,
                          "alpha_W_m2K": float(energy[k, b] / span / area / dT)})
-        means.append({"tube": k, "mean_alpha_W_m2K": float(energy[k].sum() / span / (area * bins) / dT),
-                      "averaged_over_s": span})
+        mean = {"tube": k, "mean_alpha_W_m2K": float(energy[k].sum() / span / (area * bins) / dT),
+                "averaged_over_s": span}
+        if gas_energy is not None:  # convection to the gas joins the particles' share
+            mean["particles_alpha_W_m2K"] = mean["mean_alpha_W_m2K"]
+            mean["gas_alpha_W_m2K"] = float(gas_energy[k] / span / (area * bins) / dT)
+            mean["mean_alpha_W_m2K"] += mean["gas_alpha_W_m2K"]
+        means.append(mean)
     return rows, means

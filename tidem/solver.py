@@ -96,6 +96,8 @@ class Solver:
             self.check()
         if self.model.angle_bins and self.profile_t0 is None and self.t >= self.model.scene.heat.profile_start:
             self.state.tube_bin_energy.fill(0.0)
+            if self.gas is not None and self.gas.walls:
+                self.gas.G.wall_energy.fill(0.0)
             self.profile_t0 = self.t
 
     def _gas_step(self) -> None:

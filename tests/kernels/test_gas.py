@@ -190,6 +190,48 @@ def test_closed_gas_and_particles_keep_their_heat(solver_for):
     assert total() == pytest.approx(before, rel=1e-9)
 
 
+def tube_in_still_gas(**gas):
+    """A closed box of still air at 300 K around a 400 K tube of 24 mm (gas cells of 3 mm),
+    one fixed particle in a corner."""
+    return make_scene(
+        domain={"min": [0, 0, 0], "max": [0.06, 0.012, 0.06], "periodic": ["y"], "walls": "auto",
+                "gravity": [0, 0, 0]},
+        materials={"sand": SAND},
+        particles=[{"name": "p", "material": "sand", "diameter": {"value": D}, "fixed": True,
+                    "positions": [[0.004, 0.003, 0.004]], "temperature": 300.0}],
+        tubes=[{"center": [0.03, 0.0, 0.03], "axis": "y", "diameter": 0.024, "temperature": 400.0}],
+        heat={"initial_temperature": 300.0},
+        gas={"cell_size": 0.003, "coupling_interval": 1, "initial_temperature": 300.0, **gas},
+        numerics={"dt": 1e-3, "force_dt": True},
+    )
+
+
+def test_tube_heats_still_gas_by_churchill_bernstein_and_the_gas_keeps_it(solver_for):
+    """Re = 0: Nu = 0.3, h = 0.3 k / D over the whole tube surface pi D L; the heat the tube
+    gives equals the gas's (and particle's) heat gain."""
+    s = solver_for(tube_in_still_gas())
+    G = s.gas
+    assert G.walls
+
+    def total():
+        solid = float((s.model.heat_capacity * s.state.T.to_numpy()).sum())
+        return solid + RHO_G * 1005.0 * G.gg.volume * float((G.G.eps.to_numpy() * G.G.T.to_numpy()).sum())
+
+    s.step()  # the tube's gas heat is counted from here on (heat.profile_start = 0)
+    h = 0.3 * 0.026 / 0.024
+    first = float(G.G.wall_rate.to_numpy()[0])
+    assert first == pytest.approx(h * math.pi * 0.024 * 0.012 * 100.0, rel=2e-3), "h A (T_w - T) at the start"
+    before = total()
+    for _ in range(200):
+        s.step()
+    assert G.G.T.to_numpy().max() > 300.5
+    gained = total() - before
+    assert gained == pytest.approx(float(G.G.wall_energy.to_numpy()[0]), rel=1e-9)
+    assert G.summary()["tubes0_gas_heat_W"] == pytest.approx(float(G.G.wall_rate.to_numpy()[0]))
+    s2 = solver_for(tube_in_still_gas(tube_convection="none"))
+    assert not s2.gas.walls
+
+
 @pytest.mark.parametrize("gas, fragment", [
     ({"cell_size": 0.0015}, "gas.cell_size: cells of"),
     ({"cell_size": 0.004, "nozzles": [{"x": [0.0, 0.02], "velocity": 1.0}]}, "gas.nozzles[0].x"),
