@@ -34,10 +34,8 @@ def head_on_partners(model):
         d = np.linalg.norm(x0 - x0[i], axis=1)
         d[i] = np.inf
         j = int(np.argmin(d)) if model.capacity > 1 else i
-        speed = None
-        if j != i:
-            speed = float(np.dot(v0[i] - v0[j], (x0[j] - x0[i]) / d[j]))
-        if speed is not None and speed > 0:
+        speed = float(np.dot(v0[i] - v0[j], (x0[j] - x0[i]) / d[j])) if j != i else 0.0
+        if speed > 0:
             yield i, j, speed, m[i] * m[j] / (m[i] + m[j]), r[i] * r[j] / (r[i] + r[j])
         else:
             yield i, j, None, None, None
