@@ -4,38 +4,102 @@ contact_time: for every particle, the duration of its first contact (first touch
 release, measured by the force kernel), next to the Hertz prediction for a head-on impact
 with its nearest particle at t = 0, t_c = 2.868 (m*^2 / (R* E*^2 v))^(1/5) (Johnson 1985),
 v the initial relative speed along the line of centres.
+
+impact_heat: for every particle, the heat it gained in the run, m c (T_end - T_0), next to
+two analytic estimates for one head-on Hertz impact with its nearest particle at t = 0
+(`tidem.impact_conduction`): tidem's quasi-static spot conductance integrated over the
+impact, and Sun & Chen's (1988) transient impact conduction.
+
+packet_model: for every heated tube of a moving bed, Schluender's packet model
+(`tidem.packet_model`) next to the simulated mean alpha.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from tidem.impact_conduction import hertz_impact, quasi_static_impact_heat, sun_chen_impact_heat
 from tidem.kernels import contact_laws as cl
+from tidem.packet_model import packet_alpha
 from tidem.timestep import hertz_contact_time
+
+
+def head_on_partners(model):
+    """For every particle i: its nearest particle j at t = 0 and, when they approach, the
+    approach speed along the line of centres, m* and R* (else speed None)."""
+    x0, v0, r, m = model.x0, model.v0, model.radius, model.mass
+    for i in range(model.capacity):
+        d = np.linalg.norm(x0 - x0[i], axis=1)
+        d[i] = np.inf
+        j = int(np.argmin(d)) if model.capacity > 1 else i
+        speed = float(np.dot(v0[i] - v0[j], (x0[j] - x0[i]) / d[j])) if j != i else 0.0
+        if speed > 0:
+            yield i, j, speed, m[i] * m[j] / (m[i] + m[j]), r[i] * r[j] / (r[i] + r[j])
+        else:
+            yield i, j, None, None, None
 
 
 def contact_times(model, solver) -> list[dict]:
     S = solver.state
     start = S.touch_start.to_numpy()
     end = S.touch_end.to_numpy()
-    x0, v0, r, m = model.x0, model.v0, model.radius, model.mass
     rows = []
-    for i in range(model.capacity):
-        d = np.linalg.norm(x0 - x0[i], axis=1)
-        d[i] = np.inf
-        j = int(np.argmin(d)) if model.capacity > 1 else i
+    for i, j, speed, m_eff, r_eff in head_on_partners(model):
         row = {"particle": i, "partner": j,
                "contact_time_s": float(end[i] - start[i]) if start[i] >= 0 and end[i] >= 0 else None}
-        if j != i:
-            n = (x0[j] - x0[i]) / d[j]
-            speed = float(np.dot(v0[i] - v0[j], n))
-            if speed > 0:
-                e_star = model.pair_params[model.material[i], model.material[j], cl.ESTAR]
-                m_eff = m[i] * m[j] / (m[i] + m[j])
-                r_eff = r[i] * r[j] / (r[i] + r[j])
-                row["impact_speed_m_s"] = speed
-                row["hertz_contact_time_s"] = hertz_contact_time(m_eff, r_eff, e_star, speed)
+        if speed is not None:
+            e_star = model.pair_params[model.material[i], model.material[j], cl.ESTAR]
+            row["impact_speed_m_s"] = speed
+            row["hertz_contact_time_s"] = hertz_contact_time(m_eff, r_eff, e_star, speed)
         rows.append(row)
+    return rows
+
+
+def impact_heat(model, solver) -> list[dict]:
+    """Heat gained by each particle [J] against the two analytic estimates for one impact with
+    its partner (positive: heat flows into the particle)."""
+    gained = model.heat_capacity * (solver.state.T.to_numpy() - model.temperature0)
+    mats = list(model.scene.materials.values())
+    rows = []
+    for i, j, speed, m_eff, r_eff in head_on_partners(model):
+        row = {"particle": i, "partner": j, "heat_gained_J": float(gained[i])}
+        d_t = model.temperature0[j] - model.temperature0[i]
+        if speed is not None and d_t != 0.0:
+            p = model.pair_params[model.material[i], model.material[j]]
+            e_real = p[cl.ESTAR] / p[cl.A_CORR] ** 3  # A_CORR = (E*_sim / E*_real)^(1/3)
+            sim, real = hertz_impact(m_eff, r_eff, p[cl.ESTAR], speed), hertz_impact(m_eff, r_eff, e_real, speed)
+            effusivity = [math.sqrt(mats[model.material[k]].density * mats[model.material[k]].heat_capacity
+                                    * mats[model.material[k]].conductivity) for k in (i, j)]
+            q_qs = quasi_static_impact_heat(p[cl.K_EFF], sim, d_t, radius_scale=p[cl.A_CORR])
+            q_sc = sun_chen_impact_heat(real, d_t, *effusivity)
+            row.update({"impact_speed_m_s": speed, "quasi_static_heat_J": q_qs, "sun_chen_heat_J": q_sc,
+                        "simulated_over_quasi_static": float(gained[i]) / q_qs,
+                        "simulated_over_sun_chen": float(gained[i]) / q_sc})
+        rows.append(row)
+    return rows
+
+
+def packet_model(model, tube_means: list[dict]) -> list[dict]:
+    """Schluender's packet model for each heated tube next to its simulated mean alpha; needs a
+    moving-plate outlet (its speed is the bed speed u_ref). The bed is the first particle group."""
+    outlet = model.scene.outlet
+    if outlet is None or outlet.type != "moving_plate":
+        return []
+    heat = model.scene.heat
+    group = model.scene.particles[0]
+    mat = model.scene.materials[group.material]
+    first = model.group == 0
+    rows = []
+    for row in tube_means:
+        tube = model.scene.tubes[row["tube"]]
+        ref = packet_alpha(tube_diameter=tube.diameter, speed=outlet.speed,
+                           particle_diameter=float(2.0 * model.radius[first].mean()), solid_density=mat.density,
+                           solid_conductivity=mat.conductivity, heat_capacity=mat.heat_capacity,
+                           gas_conductivity=heat.gas_conductivity, gap=heat.gas_mean_free_path + heat.roughness)
+        rows.append({"tube": row["tube"], **ref.as_dict(), "simulated_mean_alpha_W_m2K": row["mean_alpha_W_m2K"],
+                     "simulated_over_packet": row["mean_alpha_W_m2K"] / ref.alpha_W_m2K})
     return rows
 
 

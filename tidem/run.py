@@ -19,7 +19,7 @@ from tidem import __version__, checkpoint
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
-from tidem.observables import alpha_profile, contact_times
+from tidem.observables import alpha_profile, contact_times, impact_heat, packet_model
 from tidem.render.settings import render_settings
 from tidem.solver import RunError, Solver
 
@@ -149,8 +149,14 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
     }
     if solver is not None and f.contact_time:
         out["observables"] = {"contact_time": contact_times(model, solver)}
+    if solver is not None and "impact_heat" in model.scene.observables:
+        out.setdefault("observables", {})["impact_heat"] = impact_heat(model, solver)
     if solver is not None and model.angle_bins:
-        out.setdefault("observables", {})["tube_mean_alpha"] = alpha_profile(model, solver)[1]
+        means = alpha_profile(model, solver)[1]
+        out.setdefault("observables", {})["tube_mean_alpha"] = means
+        packet = packet_model(model, means)
+        if packet:
+            out["observables"]["packet_model"] = packet
     return out
 
 

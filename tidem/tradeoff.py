@@ -10,6 +10,7 @@ one that paid most for accuracy: the most time steps, then the longest wall time
 Scalar observables (`scalar_observables`), from each run's run.json and timeseries.csv:
   tube_heat_W        time-mean heat flow from each heated tube over the second half of the run
   tube_mean_alpha    mean heat-transfer coefficient of each heated tube [W/(m^2 K)]
+  tube_over_packet   that mean alpha over Schluender's packet model (moving-plate outlet only)
   mean_temperature_K particle mean temperature at the end
   pressure_drop_Pa   time-mean gas pressure drop over the second half of the run
   bed_height_m       99th percentile of particle heights in the last snapshot
@@ -84,6 +85,8 @@ def scalar_observables(run_dir: Path) -> dict[str, float]:
     obs = run.get("observables", {})
     for row in obs.get("tube_mean_alpha", []):
         out[f"tube{row['tube']}_mean_alpha_W_m2K"] = float(row["mean_alpha_W_m2K"])
+    for row in obs.get("packet_model", []):
+        out[f"tube{row['tube']}_over_packet"] = float(row["simulated_over_packet"])
     times = [r["contact_time_s"] for r in obs.get("contact_time", []) if r.get("contact_time_s")]
     if times:
         out["contact_time_s"] = float(np.mean(times))

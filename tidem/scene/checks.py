@@ -34,6 +34,8 @@ def heat_checks(scene: Scene) -> list[str]:
     if scene.heat is None:
         if scene.render.field == "temperature":
             errs.append("render.field: 'temperature' needs a [heat] table (particles have no temperature without it)")
+        if "impact_heat" in scene.observables:
+            errs.append("observables: 'impact_heat' needs a [heat] table (particles have no temperature without it)")
         errs += [f"{key}: temperatures need a [heat] table (add '[heat]' to switch heat transfer on)"
                  for key, value in temps if value is not None]
         return errs

@@ -307,4 +307,4 @@ class Scene(Strict):
     render: Render = Render()
     heat: Heat | None = None
     gas: Gas | None = None
-    observables: list[Literal["contact_time"]] = []
+    observables: list[Literal["contact_time", "impact_heat"]] = []
