@@ -62,6 +62,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     def deposit_volume(n: ti.i32):
         for I in ti.grouped(G.solid_vol):
             G.solid_vol[I] = 0.0
+        ti.loop_config(serialize=True)  # sums in particle order: bit-identical runs on any thread count
         for i in range(n):
             if S.active[i]:
                 base, frac = cic(S.x[i], -1)
@@ -84,6 +85,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 G.H[I] = 0.0
                 G.HT[I] = 0.0
         rate = 0.0
+        ti.loop_config(serialize=True)  # deposits summed in particle order (determinism)
         for i in range(n):
             if S.active[i]:
                 x = S.x[i]

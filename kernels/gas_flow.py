@@ -34,6 +34,7 @@ import taichi as ti
 from .gas_grid import make_cic
 
 CLOSED, INTERIOR, INLET, OUTLET = 0, 1, 2, 3
+SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster, deterministic)
 
 
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
@@ -42,6 +43,7 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy)."""
     cic, corner, weight = make_cic(gg)
     n = gg.cells
+    small = n[0] * n[1] * n[2] <= SERIAL_CELLS
     per = gg.periodic
     h = ti.Vector(list(gg.h))
     lo = ti.Vector(list(gg.lo))
@@ -149,6 +151,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     def assemble(dt: ti.f64) -> ti.f64:
         """rhs b = -(div(eps u*) + d eps/dt), Jacobi diagonal; return |b|^2."""
         bb = 0.0
+        if ti.static(small):
+            ti.loop_config(serialize=True)  # |b|^2 in cell order, so the CG stops at the same iteration every run
         for I in ti.grouped(G.p):
             b = 0.0
             dg = 1.0

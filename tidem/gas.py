@@ -18,11 +18,10 @@ import taichi as ti
 
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.gas_coupling import make_coupling_kernels
-from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET, make_flow_kernels
+from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET, SERIAL_CELLS, make_flow_kernels
 from tidem.kernels.gas_grid import GasGrid
 
 MAX_COURANT = 0.5
-SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster)
 
 
 class GasError(RuntimeError):
