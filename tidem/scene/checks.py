@@ -74,6 +74,13 @@ def gas_checks(scene: Scene) -> list[str]:
     return errs
 
 
+def observable_checks(scene: Scene) -> list[str]:
+    """Observables the scene cannot give (e.g. pressure_drop without [gas])."""
+    from tidem.observables import requirement
+
+    return [f"observables: '{name}' {need}" for name in scene.observables if (need := requirement(name, scene))]
+
+
 def cross_checks(scene: Scene) -> list[str]:
     """All problems that a single table cannot see, as 'key.path: message' lines."""
     errs: list[str] = []
@@ -156,6 +163,7 @@ def cross_checks(scene: Scene) -> list[str]:
 
     errs += heat_checks(scene)
     errs += gas_checks(scene)
+    errs += observable_checks(scene)
 
     dmax = max_diameter(scene)
     cell = dmax * (1.0 + scene.numerics.skin)
