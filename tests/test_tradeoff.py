@@ -65,3 +65,5 @@ def test_halving_converges_and_bad_keys_are_refused(tmp_path):
     assert bad.exit_code == 2 and "needs a positive number" in bad.output
     bad = runner.invoke(app, ["tradeoff", "sphere_impact", "--vary", "numerics.dt_fraction=0.1,7"])
     assert bad.exit_code == 2 and "variant 1" in bad.output
+    bad = runner.invoke(app, ["tradeoff", "sphere_impact", "--vary", "numerics.dt_fraction=0.1,0.2", "--set", "observables=[]"])
+    assert bad.exit_code == 2 and "declares no observables" in bad.output

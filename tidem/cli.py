@@ -356,6 +356,10 @@ def tradeoff(
     """Run variants of a scene in parallel and report wall time, particle-steps/s and observables with their
     error against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png)."""
     set_ = _with_observables(set_, observables)
+    loaded = _load(path, set_)
+    if not loaded.scene.observables:
+        _fail(f"tidem tradeoff: {loaded.name} declares no observables to compare; add `observables = [...]` to the "
+              "scene or give --observables NAME,... (see docs/scenes.md#observables)", 2)
     if halve is not None:
         _halve(path, halve, tol, set_, out, threads)
         return
