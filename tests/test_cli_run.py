@@ -22,7 +22,7 @@ def test_impact_scene_output_and_hertz(tmp_path):
                 "particle_steps_per_s"):
         assert key in run
     assert run["status"] == "finished" and run["particles"] == 6
-    rows = run["observables"]["contact_time"]
+    rows = run["contact_times"]
     for row in rows:
         # Hertz contact time within 2 % (the small damping of e = 0.95 lengthens it slightly)
         assert row["contact_time_s"] == pytest.approx(row["hertz_contact_time_s"], rel=0.02)

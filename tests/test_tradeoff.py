@@ -1,5 +1,6 @@
 """`tidem tradeoff` and `tidem sweep` on a local Dask cluster of 2 workers, and the
-step-halving loop, on the two-sphere impact (seconds per variant)."""
+step-halving loop, on the two-sphere impact (seconds per variant); observables come from the
+registry (`tidem.observables`) through each run's run.json."""
 
 import csv
 
@@ -45,11 +46,14 @@ def test_tradeoff_on_two_local_workers(tmp_path):
 def test_sweep_writes_one_folder_per_variant(tmp_path):
     out = tmp_path / "sw"
     result = runner.invoke(app, ["sweep", "sphere_impact", "--vary", "materials.sus304.restitution=0.5,0.9",
-                                 "--workers", "2", "--out", str(out)])
+                                 "--workers", "2", "--threads", "1", "--observables", "kinetic_energy,restitution",
+                                 "--out", str(out)])
     assert result.exit_code == 0, result.output
     rows = list(csv.DictReader(open(out / "sweep.csv")))
+    assert "contact_time_s" not in rows[0], "--observables replaces the scene's list"
     ke = [float(r["kinetic_energy_J"]) for r in rows]
     assert ke[0] < ke[1], "less restitution keeps less kinetic energy"
+    assert [float(r["restitution"]) for r in rows] == [pytest.approx(0.5, rel=0.01), pytest.approx(0.9, rel=0.01)]
 
 
 def test_halving_converges_and_bad_keys_are_refused(tmp_path):
@@ -61,3 +65,5 @@ def test_halving_converges_and_bad_keys_are_refused(tmp_path):
     assert bad.exit_code == 2 and "needs a positive number" in bad.output
     bad = runner.invoke(app, ["tradeoff", "sphere_impact", "--vary", "numerics.dt_fraction=0.1,7"])
     assert bad.exit_code == 2 and "variant 1" in bad.output
+    bad = runner.invoke(app, ["tradeoff", "sphere_impact", "--vary", "numerics.dt_fraction=0.1,0.2", "--set", "observables=[]"])
+    assert bad.exit_code == 2 and "declares no observables" in bad.output

@@ -312,6 +312,17 @@ def bench(
 
 
 Varies = Annotated[Optional[list[str]], typer.Option("--vary", help="KEY=V1,V2,... (repeatable; all combinations run)")]
+Threads = Annotated[Optional[int], typer.Option(help="Taichi threads per variant (default: the worker's share of the cores)")]
+Observables = Annotated[Optional[str], typer.Option(
+    "--observables", help="NAME,NAME,... from the observables registry (default: the scene's `observables`)")]
+
+
+def _with_observables(set_: list[str] | None, names: str | None) -> list[str]:
+    """--observables a,b as the override observables = ["a", "b"] (validated like the scene)."""
+    if names is None:
+        return list(set_ or [])
+    listed = ", ".join(f'"{n.strip()}"' for n in names.split(",") if n.strip())
+    return list(set_ or []) + [f"observables=[{listed}]"]
 
 
 def _variant_line(res: dict) -> None:
@@ -320,7 +331,7 @@ def _variant_line(res: dict) -> None:
     typer.echo(f"variant {res['index']:>2} [{res['status']}] {res['label']}: {figures}", err=True)
 
 
-def _sweep(path, vary, set_, out, workers, scheduler, reference, with_error: bool) -> None:
+def _sweep(path, vary, set_, out, workers, scheduler, reference, with_error: bool, threads=None) -> None:
     from tidem import tradeoff as tr
 
     loaded = _load(path, set_)
@@ -342,7 +353,7 @@ def _sweep(path, vary, set_, out, workers, scheduler, reference, with_error: boo
     out_dir = out or Path("renders") / f"{loaded.name}_{'tradeoff' if with_error else 'sweep'}"
     out_dir.mkdir(parents=True, exist_ok=True)
     typer.echo(f"tidem: {len(todo)} variants of {loaded.name} -> {out_dir}", err=True)
-    results = tr.run_all(str(loaded.source), todo, out_dir, workers, scheduler, on_done=_variant_line)
+    results = tr.run_all(str(loaded.source), todo, out_dir, workers, scheduler, on_done=_variant_line, threads=threads)
     results, ref = tr.with_errors(results, reference) if with_error else (results, -1)
     tr.write_report(results, ref, out_dir, with_error)
     typer.echo((out_dir / ("tradeoff.md" if with_error else "sweep.md")).read_text())
@@ -360,13 +371,20 @@ def tradeoff(
                                                      "(default: most steps, then slowest)")] = None,
     halve: Annotated[Optional[str], typer.Option(help="Halve this key until two runs agree within --tol")] = None,
     tol: Annotated[float, typer.Option(help="Relative tolerance of --halve")] = 0.01,
+    threads: Threads = None,
+    observables: Observables = None,
 ):
     """Run variants of a scene in parallel and report wall time, particle-steps/s and observables with their
     error against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png)."""
+    set_ = _with_observables(set_, observables)
+    loaded = _load(path, set_)
+    if not loaded.scene.observables:
+        _fail(f"tidem tradeoff: {loaded.name} declares no observables to compare; add `observables = [...]` to the "
+              "scene or give --observables NAME,... (see docs/scenes.md#observables)", 2)
     if halve is not None:
-        _halve(path, halve, tol, set_, out)
+        _halve(path, halve, tol, set_, out, threads)
         return
-    _sweep(path, vary, set_, out, workers, scheduler, reference, with_error=True)
+    _sweep(path, vary, set_, out, workers, scheduler, reference, with_error=True, threads=threads)
 
 
 @app.command()
@@ -377,12 +395,15 @@ def sweep(
     out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene>_sweep)")] = None,
     workers: Annotated[Optional[int], typer.Option(help="Local Dask worker processes (default: one per core)")] = None,
     scheduler: Annotated[Optional[str], typer.Option(help="Address of an existing Dask scheduler")] = None,
+    threads: Threads = None,
+    observables: Observables = None,
 ):
     """A parameter study: one run folder per variant and one summary table (sweep.csv, sweep.md)."""
-    _sweep(path, vary, set_, out, workers, scheduler, None, with_error=False)
+    _sweep(path, vary, _with_observables(set_, observables), out, workers, scheduler, None, with_error=False,
+           threads=threads)
 
 
-def _halve(path, key: str, tol: float, set_, out) -> None:
+def _halve(path, key: str, tol: float, set_, out, threads=None) -> None:
     from tidem import tradeoff as tr
     from tidem.scene.load import load
 
@@ -398,7 +419,8 @@ def _halve(path, key: str, tol: float, set_, out) -> None:
         _fail(exc.render(), 2)
     out_dir = out or Path("renders") / f"{loaded.name}_halving"
     out_dir.mkdir(parents=True, exist_ok=True)
-    runs, value = tr.halve(str(loaded.source), key, float(node), tol, out_dir, list(set_ or []), on_done=_variant_line)
+    runs, value = tr.halve(str(loaded.source), key, float(node), tol, out_dir, list(set_ or []), on_done=_variant_line,
+                          threads=threads)
     tr.write_report(runs, -1, out_dir, with_error=False, stem="halving")
     if value is None:
         _fail(f"--halve {key}: successive results did not agree within {tol:g} after {len(runs)} runs; "

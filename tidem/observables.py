@@ -1,22 +1,28 @@
-"""Observables computed from a finished run.
+"""The observables registry: scalar results of a run, declared by the scene
+(`observables = ["bed_height", ...]`), written to run.json by every run and compared by
+`tidem tradeoff` and `tidem sweep`.
 
-contact_time: for every particle, the duration of its first contact (first touch to first
-release, measured by the force kernel), next to the Hertz prediction for a head-on impact
-with its nearest particle at t = 0, t_c = 2.868 (m*^2 / (R* E*^2 v))^(1/5) (Johnson 1985),
-v the initial relative speed along the line of centres.
+Each observable is one function of a `RunRecord` (the state at the end of a run and its
+time series) that returns named values, one per column (several for per-tube values); its
+docstring gives the definition and the unit. `requirement(name, scene)` says what a scene
+lacks for an observable (a heated tube, a gas phase), so that a scene asking for one it
+cannot give is refused at load time. docs/scenes.md lists the same definitions.
 
-impact_heat: for every particle, the heat it gained in the run, m c (T_end - T_0), next to
-two analytic estimates for one head-on Hertz impact with its nearest particle at t = 0
-(`tidem.impact_conduction`): tidem's quasi-static spot conductance integrated over the
-impact, and Sun & Chen's (1988) transient impact conduction.
+"Second half" means the time-series samples with t >= t_end / 2.
 
-packet_model: for every heated tube of a moving bed, Schluender's packet model
-(`tidem.packet_model`) next to the simulated mean alpha.
+Per-particle and per-tube tables behind some observables go to run.json as well:
+contact_times (first-contact durations next to Hertz, t_c = 2.868 (m*^2 / (R* E*^2 v))^(1/5),
+Johnson 1985), impact_heat (heat gained per particle next to the quasi-static Hertz integral
+and Sun & Chen 1988, `tidem.impact_conduction`) and packet_model (Schluender's packet model
+next to the simulated mean alpha, `tidem.packet_model`).
 """
 
 from __future__ import annotations
 
+import difflib
 import math
+from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -24,6 +30,230 @@ from tidem.impact_conduction import hertz_impact, quasi_static_impact_heat, sun_
 from tidem.kernels import contact_laws as cl
 from tidem.packet_model import packet_alpha
 from tidem.timestep import hertz_contact_time
+
+
+@dataclass
+class RunRecord:
+    """What the observables see of a finished run. Arrays cover the active particles."""
+
+    time_s: float
+    x: np.ndarray
+    """Particle centres at the end [m], shape [n, 3]."""
+    v: np.ndarray
+    """Particle velocities at the end [m/s], shape [n, 3]."""
+    mass: np.ndarray
+    """Particle masses [kg], shape [n]; zero-motion (fixed) particles included."""
+    radius: np.ndarray
+    """Particle radii [m], shape [n]."""
+    v0: np.ndarray
+    """Initial velocities of the same particles [m/s], shape [n, 3]."""
+    floor_z: float
+    """Height of the bed's floor at the end [m]: the outlet plate, else the domain's min z."""
+    series: dict[str, np.ndarray] = field(default_factory=dict)
+    """timeseries.csv as columns."""
+    temperature: np.ndarray | None = None
+    """Particle temperatures at the end [K], shape [n]; None without [heat]."""
+    alpha_means: list[dict] = field(default_factory=list)
+    """Mean heat-transfer coefficient per heated tube (`alpha_profile`)."""
+    contact_rows: list[dict] = field(default_factory=list)
+    """First-contact durations per particle (`contact_times`)."""
+    impact_rows: list[dict] = field(default_factory=list)
+    """Heat per impact per particle (`impact_heat_rows`), when the scene declares impact_heat."""
+    packet_rows: list[dict] = field(default_factory=list)
+    """Packet model per heated tube (`packet_model_rows`), for a moving-plate outlet."""
+
+
+def record(model, solver, series: dict[str, np.ndarray]) -> RunRecord:
+    """The RunRecord of a run at its end (after the time series is closed)."""
+    S = solver.state
+    active = S.active.to_numpy().astype(bool)
+    floor = model.scene.domain.min[2]
+    for p in model.planes:
+        if p["name"] == "outlet plate":
+            t0, t1 = p["t"]
+            floor = p["p0"][2] + p["vel"][2] * (min(max(solver.t, t0), t1) - t0)
+    means = alpha_profile(model, solver)[1]
+    return RunRecord(
+        time_s=solver.t, x=S.x.to_numpy()[active], v=S.v.to_numpy()[active], mass=model.mass[active],
+        radius=S.radius.to_numpy()[active], v0=model.v0[active], floor_z=float(floor), series=series,
+        temperature=S.T.to_numpy()[active] if model.features.heat else None,
+        alpha_means=means,
+        contact_rows=contact_times(model, solver) if model.features.contact_time else [],
+        impact_rows=impact_heat_rows(model, solver) if "impact_heat" in model.scene.observables else [],
+        packet_rows=packet_model_rows(model, means))
+
+
+Compute = Callable[[RunRecord], dict[str, float]]
+OBSERVABLES: dict[str, Compute] = {}
+_NEEDS: dict[str, Callable] = {}
+
+
+def observable(name: str, needs: Callable | None = None) -> Callable[[Compute], Compute]:
+    """Register `fn` as observable `name`; `needs(scene)` returns what the scene lacks, or None."""
+    def register(fn: Compute) -> Compute:
+        OBSERVABLES[name] = fn
+        if needs is not None:
+            _NEEDS[name] = needs
+        return fn
+    return register
+
+
+def unknown_name_message(name: str) -> str | None:
+    """None for a registered name; otherwise the error text with the closest valid name."""
+    if name in OBSERVABLES:
+        return None
+    close = difflib.get_close_matches(name, list(OBSERVABLES), n=1, cutoff=0.5)
+    hint = f"did you mean '{close[0]}'?" if close else f"valid names: {', '.join(OBSERVABLES)}"
+    return f"unknown observable '{name}'; {hint}"
+
+
+def requirement(name: str, scene) -> str | None:
+    """What `scene` lacks for observable `name` (a sentence), or None."""
+    needs = _NEEDS.get(name)
+    return needs(scene) if needs is not None else None
+
+
+def compute(names: list[str], rec: RunRecord) -> dict[str, dict[str, float]]:
+    """{observable name: {column: value}} for the declared names, in their order."""
+    return {name: OBSERVABLES[name](rec) for name in names}
+
+
+def flatten(observed: dict[str, dict[str, float]]) -> dict[str, float]:
+    """run.json's observables as one {column: value} table (what tradeoff compares)."""
+    return {col: float(val) for values in observed.values() for col, val in values.items() if val is not None}
+
+
+def _late_mean(rec: RunRecord, column: str) -> float:
+    t = rec.series["time_s"]
+    return float(np.nanmean(rec.series[column][t >= 0.5 * t[-1]]))
+
+
+def _heated_tube(scene) -> str | None:
+    if scene.heat is None or not any(t.temperature is not None for t in scene.tubes):
+        return "needs [heat] and a tube with a `temperature`"
+    return None
+
+
+def _heat(scene) -> str | None:
+    return None if scene.heat is not None else "needs [heat]"
+
+
+def _gas(scene) -> str | None:
+    return None if scene.gas is not None else "needs [gas]"
+
+
+@observable("tube_heat", needs=_heated_tube)
+def tube_heat(rec: RunRecord) -> dict[str, float]:
+    """Heat flow from each fixed-temperature surface into the bed [W] (`tubes1_heat_W`, named
+    after the surface), time mean over the second half of the run (timeseries.csv)."""
+    return {k: _late_mean(rec, k) for k in rec.series if k.endswith("_heat_W")}
+
+
+@observable("tube_mean_alpha", needs=_heated_tube)
+def tube_mean_alpha(rec: RunRecord) -> dict[str, float]:
+    """Mean heat-transfer coefficient of each heated tube [W/(m^2 K)] (`tube1_mean_alpha_W_m2K`):
+    heat delivered since heat.profile_start / (time x tube area x (T_tube - heat.initial_temperature)),
+    source 3 eq. 34-36 averaged over the whole circumference."""
+    return {f"tube{row['tube']}_mean_alpha_W_m2K": row["mean_alpha_W_m2K"] for row in rec.alpha_means}
+
+
+def _top(rec: RunRecord) -> float:
+    return float(np.percentile(rec.x[:, 2], 99)) if len(rec.x) else float("nan")
+
+
+@observable("bed_height")
+def bed_height(rec: RunRecord) -> dict[str, float]:
+    """Bed height [m] (`bed_height_m`): the 99th percentile of the particle centres' z at the
+    end (absolute z, not above the floor; the percentile ignores a few thrown particles)."""
+    return {"bed_height_m": _top(rec)}
+
+
+@observable("outlet_mass_flow")
+def outlet_mass_flow(rec: RunRecord) -> dict[str, float]:
+    """Solids mass flow down through a horizontal section [kg/s] (`outlet_mass_flow_kg_s`), at
+    the end, averaged over the bed's height H: sum_i m_i (-v_z,i) / H, with H from the floor
+    (outlet plate or domain bottom) to the bed top (bed_height + mean radius). In a steady bed
+    this is the outlet flux; a plug sinking at the plate speed u gives M u / H."""
+    h = _top(rec) + float(rec.radius.mean()) - rec.floor_z
+    return {"outlet_mass_flow_kg_s": float(np.sum(rec.mass * -rec.v[:, 2]) / h)}
+
+
+@observable("mean_temperature", needs=_heat)
+def mean_temperature(rec: RunRecord) -> dict[str, float]:
+    """Mean particle temperature at the end [K] (`mean_temperature_K`), unweighted."""
+    return {"mean_temperature_K": float(rec.temperature.mean())}
+
+
+@observable("contact_time")
+def contact_time(rec: RunRecord) -> dict[str, float]:
+    """Mean first-contact duration [s] (`contact_time_s`) over the particles that touched and
+    let go (first touch to first release, measured by the force kernel), and the mean Hertz
+    prediction for the same particles (`hertz_contact_time_s`, see `contact_times`)."""
+    rows = [r for r in rec.contact_rows if r.get("contact_time_s")]
+    hertz = [r["hertz_contact_time_s"] for r in rows if "hertz_contact_time_s" in r]
+    return {"contact_time_s": float(np.mean([r["contact_time_s"] for r in rows])) if rows else None,
+            "hertz_contact_time_s": float(np.mean(hertz)) if hertz else None}
+
+
+@observable("restitution")
+def restitution(rec: RunRecord) -> dict[str, float]:
+    """Rebound over impact speed [-] (`restitution`): mean over the particles that moved at
+    t = 0 of -(v_end . v0) / |v0|^2. For head-on impacts without gravity, with the centre of
+    mass at rest (two equal spheres closing, or a sphere hitting a wall square on), this is the
+    normal coefficient of restitution."""
+    speed2 = np.einsum("ij,ij->i", rec.v0, rec.v0)
+    moving = speed2 > 0
+    if not moving.any():
+        return {"restitution": None}
+    return {"restitution": float(np.mean(-np.einsum("ij,ij->i", rec.v[moving], rec.v0[moving]) / speed2[moving]))}
+
+
+@observable("pressure_drop", needs=_gas)
+def pressure_drop(rec: RunRecord) -> dict[str, float]:
+    """Gas pressure drop across the bed [Pa] (`pressure_drop_Pa`): the distributor-level minus
+    the top pressure (timeseries column gas_pressure_drop_Pa), time mean over the second half."""
+    return {"pressure_drop_Pa": _late_mean(rec, "gas_pressure_drop_Pa")}
+
+
+@observable("kinetic_energy")
+def kinetic_energy(rec: RunRecord) -> dict[str, float]:
+    """Translational kinetic energy of the particles at the end [J] (`kinetic_energy_J`),
+    sum_i m_i |v_i|^2 / 2."""
+    return {"kinetic_energy_J": float(0.5 * np.sum(rec.mass * np.einsum("ij,ij->i", rec.v, rec.v)))}
+
+
+@observable("impact_heat", needs=_heat)
+def impact_heat(rec: RunRecord) -> dict[str, float]:
+    """Heat passed in the head-on impacts [J] (`impact_heat_J`: mean over the particles that
+    gained heat of m c (T_end - T_0)) and its mean ratios to the quasi-static Hertz integral of
+    the spot conductance (`over_quasi_static`) and to Sun & Chen's transient impact conduction
+    (`over_sun_chen`); per-particle rows in run.json's `impact_heat`."""
+    rows = [r for r in rec.impact_rows if "quasi_static_heat_J" in r and r["heat_gained_J"] > 0]
+    if not rows:
+        return {"impact_heat_J": None}
+    return {"impact_heat_J": float(np.mean([r["heat_gained_J"] for r in rows])),
+            "over_quasi_static": float(np.mean([r["simulated_over_quasi_static"] for r in rows])),
+            "over_sun_chen": float(np.mean([r["simulated_over_sun_chen"] for r in rows]))}
+
+
+def _moving_bed_tube(scene) -> str | None:
+    if scene.outlet is None or scene.outlet.type != "moving_plate":
+        return "needs a moving_plate outlet (its speed is the bed speed)"
+    return _heated_tube(scene)
+
+
+@observable("packet_model", needs=_moving_bed_tube)
+def packet_model(rec: RunRecord) -> dict[str, float]:
+    """Schluender's packet model alpha of each heated tube [W/(m^2 K)]
+    (`tube1_packet_alpha_W_m2K`) and the simulated mean alpha over it (`tube1_over_packet`)."""
+    out = {}
+    for row in rec.packet_rows:
+        out[f"tube{row['tube']}_packet_alpha_W_m2K"] = row["alpha_W_m2K"]
+        out[f"tube{row['tube']}_over_packet"] = row["simulated_over_packet"]
+    return out
+
+
+# Measurements from the solver state that the observables above draw on.
 
 
 def head_on_partners(model):
@@ -57,7 +287,7 @@ def contact_times(model, solver) -> list[dict]:
     return rows
 
 
-def impact_heat(model, solver) -> list[dict]:
+def impact_heat_rows(model, solver) -> list[dict]:
     """Heat gained by each particle [J] against the two analytic estimates for one impact with
     its partner (positive: heat flows into the particle)."""
     gained = model.heat_capacity * (solver.state.T.to_numpy() - model.temperature0)
@@ -81,7 +311,7 @@ def impact_heat(model, solver) -> list[dict]:
     return rows
 
 
-def packet_model(model, tube_means: list[dict]) -> list[dict]:
+def packet_model_rows(model, tube_means: list[dict]) -> list[dict]:
     """Schluender's packet model for each heated tube next to its simulated mean alpha; needs a
     moving-plate outlet (its speed is the bed speed u_ref). The bed is the first particle group."""
     outlet = model.scene.outlet

@@ -16,10 +16,11 @@ from typing import Callable
 import numpy as np
 
 from tidem import __version__, checkpoint
+from tidem import observables as obs
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
-from tidem.observables import alpha_profile, contact_times, impact_heat, packet_model
+from tidem.render.plots import read_series
 from tidem.render.settings import render_settings
 from tidem.solver import RunError, Solver
 
@@ -91,7 +92,7 @@ class Output:
 
     def write_alpha_profile(self, solver: Solver) -> None:
         """alpha_profile.csv: tube, angle_deg (0 = top), alpha_W_m2K."""
-        rows, _ = alpha_profile(self.model, solver)
+        rows, _ = obs.alpha_profile(self.model, solver)
         if rows:
             lines = ["tube,angle_deg,alpha_W_m2K"] + [f"{r['tube']},{r['angle_deg']:.2f},{r['alpha_W_m2K']:.6g}" for r in rows]
             (self.dir / "alpha_profile.csv").write_text("\n".join(lines) + "\n")
@@ -147,16 +148,23 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
             "distributor": distributor_parts(model.scene),
         },
     }
-    if solver is not None and f.contact_time:
-        out["observables"] = {"contact_time": contact_times(model, solver)}
-    if solver is not None and "impact_heat" in model.scene.observables:
-        out.setdefault("observables", {})["impact_heat"] = impact_heat(model, solver)
-    if solver is not None and model.angle_bins:
-        means = alpha_profile(model, solver)[1]
-        out.setdefault("observables", {})["tube_mean_alpha"] = means
-        packet = packet_model(model, means)
-        if packet:
-            out["observables"]["packet_model"] = packet
+    return out
+
+
+def observed(model: Model, solver: Solver, series_path: Path) -> dict:
+    """run.json's `observables` (the scene's declared ones, `tidem.observables`) and, with
+    contact_time, the per-particle `contact_times`."""
+    names = model.scene.observables
+    if not names:
+        return {}
+    rec = obs.record(model, solver, read_series(series_path))
+    out = {"observables": obs.compute(names, rec)}
+    if rec.contact_rows:
+        out["contact_times"] = rec.contact_rows
+    if rec.impact_rows:
+        out["impact_heat"] = rec.impact_rows
+    if rec.packet_rows:
+        out["packet_model"] = rec.packet_rows
     return out
 
 
@@ -305,5 +313,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         data["setup_s"] = setup_s
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])
+        if status == "finished":
+            data.update(observed(model, solver, out.series.path))
         out.write_summary(data)
     return RunResult(status=status, out_dir=Path(out_dir), steps=solver.steps, wall_s=wall, message=message, summary=data)

@@ -7,15 +7,9 @@ process, in its own run folder (`variant_NN/`, frames off), with the worker's sh
 cores as Taichi threads. The reference is the variant given by `--reference` (default: the
 one that paid most for accuracy: the most time steps, then the longest wall time).
 
-Scalar observables (`scalar_observables`), from each run's run.json and timeseries.csv:
-  tube_heat_W        time-mean heat flow from each heated tube over the second half of the run
-  tube_mean_alpha    mean heat-transfer coefficient of each heated tube [W/(m^2 K)]
-  tube_over_packet   that mean alpha over Schluender's packet model (moving-plate outlet only)
-  mean_temperature_K particle mean temperature at the end
-  pressure_drop_Pa   time-mean gas pressure drop over the second half of the run
-  bed_height_m       99th percentile of particle heights in the last snapshot
-  kinetic_energy_J   kinetic energy at the end
-  contact_time_s     mean first-contact duration over particles that touched
+Observables: the scene's declared ones (`observables = [...]`, or `--observables` as an
+override), computed by each run from the registry in `tidem.observables` and read back from
+its run.json, one column per value (e.g. `bed_height_m`, `tubes1_heat_W`).
 Relative error = |value - reference| / |reference| (absolute when the reference is 0).
 """
 
@@ -23,12 +17,11 @@ from __future__ import annotations
 
 import csv
 import itertools
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
+from tidem.observables import flatten
 
 
 @dataclass
@@ -58,46 +51,6 @@ def variants(vary: list[tuple[str, list[str]]], fixed: list[str] = ()) -> list[V
     return [Variant(i, list(fixed) + list(c)) for i, c in enumerate(combos)]
 
 
-def _series(path: Path) -> dict[str, np.ndarray]:
-    with open(path, newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    if not rows:
-        return {}
-    return {k: np.array([float(r[k]) if r.get(k) not in (None, "") else np.nan for r in rows]) for k in rows[0]}
-
-
-def scalar_observables(run_dir: Path) -> dict[str, float]:
-    """The registry above, for one finished run folder (only what the run has)."""
-    run = json.loads((run_dir / "run.json").read_text())
-    series = _series(run_dir / "timeseries.csv") if (run_dir / "timeseries.csv").exists() else {}
-    out: dict[str, float] = {}
-    if series:
-        t = series["time_s"]
-        late = t >= 0.5 * t[-1]
-        for key, values in series.items():
-            if key.startswith("tubes") and key.endswith("_heat_W"):
-                out[key.replace("_heat_W", "_heat_W_mean")] = float(np.nanmean(values[late]))
-        if "gas_pressure_drop_Pa" in series:
-            out["pressure_drop_Pa"] = float(np.nanmean(series["gas_pressure_drop_Pa"][late]))
-        if "T_mean_K" in series:
-            out["mean_temperature_K"] = float(series["T_mean_K"][-1])
-        out["kinetic_energy_J"] = float(series["kinetic_energy_J"][-1])
-    obs = run.get("observables", {})
-    for row in obs.get("tube_mean_alpha", []):
-        out[f"tube{row['tube']}_mean_alpha_W_m2K"] = float(row["mean_alpha_W_m2K"])
-    for row in obs.get("packet_model", []):
-        out[f"tube{row['tube']}_over_packet"] = float(row["simulated_over_packet"])
-    times = [r["contact_time_s"] for r in obs.get("contact_time", []) if r.get("contact_time_s")]
-    if times:
-        out["contact_time_s"] = float(np.mean(times))
-    snaps = sorted((run_dir / "snapshots").glob("*.vtp"))
-    if snaps:
-        from tidem.io.vtp import read_vtp
-
-        out["bed_height_m"] = float(np.percentile(read_vtp(snaps[-1])[0][:, 2], 99))
-    return out
-
-
 def run_variant(scene: str, overrides: list[str], out_dir: str, threads: int) -> dict:
     """Run one variant (in a Dask worker process); return its figures or its error."""
     from tidem.model import build_model
@@ -116,17 +69,18 @@ def run_variant(scene: str, overrides: list[str], out_dir: str, threads: int) ->
     s = result.summary
     return {"status": result.status, "message": result.message, "wall_s": s["wall_s"],
             "particle_steps_per_s": s["particle_steps_per_s"], "steps": s["steps"], "dt_s": s["dt_s"],
-            "observables": scalar_observables(Path(out_dir)) if result.status == "finished" else {}}
+            "observables": flatten(s.get("observables", {})) if result.status == "finished" else {}}
 
 
 def run_all(scene: str, todo: list[Variant], out_dir: Path, workers: int | None = None,
-            scheduler: str | None = None, on_done=None) -> list[dict]:
-    """Run every variant on a Dask cluster (local processes unless `scheduler` is given)."""
+            scheduler: str | None = None, on_done=None, threads: int | None = None) -> list[dict]:
+    """Run every variant on a Dask cluster (local processes unless `scheduler` is given), each
+    with `threads` Taichi threads (default: the worker's share of the cores)."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     cores = os.cpu_count() or 1
     workers = workers or max(1, min(len(todo), cores))
-    threads = max(1, cores // workers)
+    threads = threads or max(1, cores // workers)
     cluster = None
     if scheduler is None:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
@@ -229,14 +183,14 @@ def agree(a: dict, b: dict, tol: float) -> bool:
 
 
 def halve(scene: str, key: str, start: float, tol: float, out_dir: Path, fixed: list[str] = (),
-          max_halvings: int = 6, on_done=None) -> tuple[list[dict], float | None]:
+          max_halvings: int = 6, on_done=None, threads: int | None = None) -> tuple[list[dict], float | None]:
     """Halve `key` from `start` until two successive runs agree within `tol` (source 2's
     step-halving loop); return the runs and the value it converged at (None if it did not)."""
     runs: list[dict] = []
     value = start
     for i in range(max_halvings + 1):
         overrides = list(fixed) + [f"{key}={value!r}"]
-        res = run_variant(scene, overrides, str(out_dir / f"halving_{i:02d}"), os.cpu_count() or 1)
+        res = run_variant(scene, overrides, str(out_dir / f"halving_{i:02d}"), threads or os.cpu_count() or 1)
         res.update(index=i, label=", ".join(overrides), overrides=overrides)
         runs.append(res)
         if on_done is not None:

@@ -93,7 +93,7 @@ def run_check(path, *extra):
         (lambda r: r.pop("heat"),
          "particles[0].temperature: temperatures need a [heat] table"),
         (lambda r: r.pop("heat"),
-         "observables: 'impact_heat' needs a [heat] table"),
+         "observables: 'impact_heat' needs [heat]"),
         (lambda r: r["materials"]["sus304"].pop("conductivity"),
          "materials.sus304.conductivity: required with [heat]"),
         (lambda r: r["particles"][0].update(diameter={"distribution": "gauss", "value": 0.01}),

@@ -34,8 +34,6 @@ def heat_checks(scene: Scene) -> list[str]:
     if scene.heat is None:
         if scene.render.field == "temperature":
             errs.append("render.field: 'temperature' needs a [heat] table (particles have no temperature without it)")
-        if "impact_heat" in scene.observables:
-            errs.append("observables: 'impact_heat' needs a [heat] table (particles have no temperature without it)")
         errs += [f"{key}: temperatures need a [heat] table (add '[heat]' to switch heat transfer on)"
                  for key, value in temps if value is not None]
         return errs
@@ -74,6 +72,13 @@ def gas_checks(scene: Scene) -> list[str]:
     if scene.heat is None and (gas.inlet_temperature is not None or gas.initial_temperature is not None):
         errs.append("gas: gas temperatures need a [heat] table (add '[heat]' to switch heat transfer on)")
     return errs
+
+
+def observable_checks(scene: Scene) -> list[str]:
+    """Observables the scene cannot give (e.g. pressure_drop without [gas])."""
+    from tidem.observables import requirement
+
+    return [f"observables: '{name}' {need}" for name in scene.observables if (need := requirement(name, scene))]
 
 
 def cross_checks(scene: Scene) -> list[str]:
@@ -158,6 +163,7 @@ def cross_checks(scene: Scene) -> list[str]:
 
     errs += heat_checks(scene)
     errs += gas_checks(scene)
+    errs += observable_checks(scene)
 
     dmax = max_diameter(scene)
     cell = dmax * (1.0 + scene.numerics.skin)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from tidem.scene.types import Box, Fraction, NonNegative, Number, Positive, Strict, Vec3
 
@@ -307,4 +307,16 @@ class Scene(Strict):
     render: Render = Render()
     heat: Heat | None = None
     gas: Gas | None = None
-    observables: list[Literal["contact_time", "impact_heat"]] = []
+    observables: list[str] = []
+
+    @field_validator("observables")
+    @classmethod
+    def _known_observables(cls, names: list[str]) -> list[str]:
+        from tidem.observables import unknown_name_message
+
+        problems = [m for m in map(unknown_name_message, names) if m]
+        if len(set(names)) != len(names):
+            problems.append("a name is listed twice")
+        if problems:
+            raise ValueError("; ".join(problems))
+        return names
