@@ -367,11 +367,13 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                                     nb = I + e
                                 t_up = G.T[cell_index(nb)]
                             net += flux * t_up
-                hw = 0.0
+                hw = 0.0  # tube convection conductance [W/K] and its heat source hw T_w [W]
+                hw_tw = 0.0
                 if ti.static(tube_walls):
                     if G.wall_A[I] > 0.0:
                         hw = wall_conductance(I)
-                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw * G.wall_T[I])) \
+                        hw_tw = hw * G.wall_T[I]
+                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw_tw)) \
                     / (rho_c * G.eps[I] * vol + dt * (G.H[I] + hw))
                 if ti.static(tube_walls):
                     if hw > 0.0:
