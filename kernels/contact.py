@@ -23,12 +23,13 @@ from .heat import spot_conductance, wall_conductance
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
-                      angle_bins: int = 0):
+                      angle_bins: int = 0, pairs: bool = True):
     """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
     the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
     with `angle_bins` the heat flow from each tube by angle omega of the contact point from the
-    top of the tube, tube_bin_rate[k, b] (omega = atan2(side, up), 0 = top, 180 deg = bottom)."""
+    top of the tube, tube_bin_rate[k, b] (omega = atan2(side, up), 0 = top, 180 deg = bottom).
+    `pairs = False` (contact.model = 'none') skips the neighbour list: gravity and walls only."""
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
@@ -86,7 +87,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 touching = 0
                 heat_in = 0.0
                 p_same = S.pp[0, 0]
-                for k in range(S.nbr_n[i]):
+                n_pairs = S.nbr_n[i]
+                if ti.static(not pairs):
+                    n_pairs = 0
+                for k in range(n_pairs):
                     j = S.nbr[i, k]
                     d = min_image(S.x[j] - xi)
                     rj = S.radius[j]

@@ -20,7 +20,8 @@ the top is a pressure outlet (p = 0 on the face); other box sides and faces of s
 (cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
 periodic axes wrap.
 Gas energy (upwind finite volume, particle exchange implicit, so stable for any exchange rate):
-  rho c [eps^{n+1} T^{n+1} - eps^n T^n] V / dt + rho c sum_f (eps u)_f A_f T_up = HT - H T^{n+1}.
+  rho c [eps^{n+1} T^{n+1} - eps^n T^n] V / dt + rho c sum_f (eps u)_f A_f T_up = HT - H T^{n+1} (+ Qs / dt,
+  heat handed back by particles that reacted away, with reactions).
 """
 
 import taichi as ti
@@ -30,7 +31,8 @@ from .gas_grid import make_cic
 CLOSED, INTERIOR, INLET, OUTLET = 0, 1, 2, 3
 
 
-def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0):
+def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
+                      sources: bool = False):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas`)."""
     cic, corner, weight = make_cic(gg)
     n = gg.cells
@@ -310,34 +312,52 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                 ti.atomic_max(worst, ti.abs(U[c][I]) * dt / h[c])
         return worst
 
+    @ti.func
+    def upwind(F: ti.template(), I, f_in):
+        """Sum over the faces of cell I of (eps u)_f A_f F_up (outward positive) [unit of F m^3/s],
+        and the part of it through the inlet and outlet faces; F_up is the upwind cell's value,
+        f_in on inlet faces and the cell's own value on outflow (or backflow) at the outlet."""
+        net = 0.0
+        boundary = 0.0
+        for c in ti.static(range(3)):
+            e = unit(c)
+            for side in ti.static((0, 1)):
+                f = I
+                if ti.static(side == 1):
+                    f = face_index(I + e, c)
+                kind = K[c][f]
+                if kind != CLOSED:
+                    flux = face_eps(f, c) * U[c][f] * area[c]
+                    if ti.static(side == 0):
+                        flux = -flux
+                    f_up = F[I]
+                    if kind == INLET:
+                        f_up = f_in
+                    elif flux < 0.0 and kind == INTERIOR:
+                        nb = I - e
+                        if ti.static(side == 1):
+                            nb = I + e
+                        f_up = F[cell_index(nb)]
+                    net += flux * f_up
+                    if kind != INTERIOR:
+                        boundary += flux * f_up
+        return net, boundary
+
     @ti.kernel
     def energy(dt: ti.f64, t_in: ti.f64):
-        """Upwind advection of eps T with implicit particle exchange (module docstring)."""
+        """Upwind advection of eps T with implicit particle exchange (module docstring); with
+        `sources`, plus the heat Qs [J] particles handed to the gas, and the enthalpy that
+        entered through the inlet and outlet summed in bsum[0] [J]."""
         for I in ti.grouped(G.T):
             G.T_new[I] = G.T[I]
             if G.solid[I] == 0:
-                net = 0.0  # sum over faces of rho c (eps u)_f A_f T_up, outward positive
-                for c in ti.static(range(3)):
-                    e = unit(c)
-                    for side in ti.static((0, 1)):
-                        f = I
-                        if ti.static(side == 1):
-                            f = face_index(I + e, c)
-                        kind = K[c][f]
-                        if kind != CLOSED:
-                            flux = face_eps(f, c) * U[c][f] * area[c]
-                            if ti.static(side == 0):
-                                flux = -flux
-                            t_up = G.T[I]
-                            if kind == INLET:
-                                t_up = t_in
-                            elif flux < 0.0 and kind == INTERIOR:
-                                nb = I - e
-                                if ti.static(side == 1):
-                                    nb = I + e
-                                t_up = G.T[cell_index(nb)]
-                            net += flux * t_up
-                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * G.HT[I]) \
+                net, boundary = upwind(G.T, I, t_in)
+                extra = 0.0
+                if ti.static(sources):
+                    extra = G.Qs[I]
+                    G.Qs[I] = 0.0
+                    G.bsum[0] += -dt * rho_c * boundary
+                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * G.HT[I] + extra) \
                     / (rho_c * G.eps[I] * vol + dt * G.H[I])
         for I in ti.grouped(G.T):
             G.T[I] = G.T_new[I]
@@ -346,4 +366,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                    cg_direction=cg_direction, cg_serial=cg_serial, correct=correct, divergence=divergence, courant=courant)
     if heat:
         kernels["energy"] = energy
+    kernels["upwind"] = upwind
+    kernels["face_eps"] = face_eps
+    kernels["cell_index"] = cell_index
+    kernels["face_index"] = face_index
     return kernels

@@ -20,6 +20,8 @@ from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
 from tidem.observables import alpha_profile, contact_times
+from tidem.reaction_output import ReactionLog
+from tidem.reactions import reaction_summary
 from tidem.render.settings import render_settings
 from tidem.solver import RunError, Solver
 
@@ -55,6 +57,7 @@ class Output:
         else:
             (self.dir / "snapshots.pvd").unlink(missing_ok=True)
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
+        self.reactions = ReactionLog(self.dir, model) if model.features.reactions else None
 
     def snapshot(self, solver: Solver) -> Path:
         """Write the next snapshot and list it in snapshots.pvd; returns its file."""
@@ -83,6 +86,9 @@ class Output:
             row.update(solver.heat_summary())
         if solver.gas is not None:
             row.update(solver.gas.summary())
+        if self.reactions is not None:
+            row.update(reaction_summary(solver))
+            self.reactions.sample(solver)
         for p in self.model.planes:
             if p["name"] == "outlet plate":
                 t0, t1 = p["t"]
@@ -284,6 +290,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             out.write_alpha_profile(solver)
         wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
         data = summary(model, solver, status, wall, message)
+        if out.reactions is not None:
+            data.setdefault("observables", {})["reactions"] = out.reactions.finish(solver)
         data["setup_s"] = setup_s
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])
