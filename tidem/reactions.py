@@ -76,6 +76,8 @@ def reaction_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarr
         d = 2.0 * float(radius[sel].min())
         rho = float(density[sel][np.argmin(radius[sel])])
         key = f"reactions[{i}]"
+        if r.type == "polymerization":
+            continue  # heat only: its explicit limit is the temperature step
         temps = [heat.initial_temperature, gas.inlet_temperature or 0.0, gas.initial_temperature or 0.0]
         temps += [g.temperature or 0.0 for g in scene.particles]
         if r.type == "char_combustion":
@@ -90,7 +92,7 @@ def reaction_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarr
             x = max(ox.mole_fraction, ox.initial_mole_fraction or 0.0)
             per_s = math.pi * d * d * k_d * x * ox.pressure / (rho * math.pi * d**3 / 6)
             what = "burns"
-        elif r.type == "sublimation":
+        else:
             re = gas.density * _max_speed(gas) * d / gas.viscosity
             pr = gas.heat_capacity * gas.viscosity / heat.gas_conductivity
             nu_max = 2.0 + 0.6 * math.sqrt(re) * pr ** (1 / 3)
@@ -98,8 +100,6 @@ def reaction_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarr
             q = nu_max * heat.gas_conductivity * math.pi * d * max(t_hot - r.temperature, 0.0)
             per_s = q / (rho * math.pi * d**3 / 6 * r.latent_heat)
             what = "sublimates"
-        else:
-            continue  # polymerization adds heat only; its explicit limit is the temperature step
         if per_s * dt > MAX_FRACTION:
             errs.append(f"{key}: a step of {dt:.3g} s {what} up to {100 * per_s * dt:.2g} % of the smallest particle's "
                         f"mass (limit {100 * MAX_FRACTION:g} %); use numerics.dt <= {MAX_FRACTION / per_s:.3g}")

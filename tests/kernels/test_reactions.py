@@ -241,8 +241,8 @@ def test_too_long_step_for_sublimation_is_refused():
     from tidem.scene.load import validate
 
     raw = plasma_scene([[0.001, 0.001, 0.001]])
-    raw["numerics"]["dt"] = 2e-6
+    raw["numerics"]["dt"] = 1e-6
     with pytest.raises(SceneError) as err:
         build_model(validate(raw))
-    assert "reactions[0]: a step of 2e-06 s sublimates up to 2.4 % of the smallest particle's mass" in str(err.value)
+    assert "reactions[0]: a step of 1e-06 s sublimates up to 1.2 % of the smallest particle's mass" in str(err.value)
     assert "numerics.dt <= 8.3" in str(err.value)
