@@ -26,9 +26,12 @@ from .gas_grid import make_cic
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
-                          species: bool = False):
+                          species: bool = False, tracer_dt: float = 0.0):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n)) for particles S and gas G;
-    with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY."""
+    with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
+    `tracer_dt` (the DEM step, scenes with reactions) a reacting particle's drag coefficient is
+    capped at m / (2 dt): one that shrank below the drag relaxation limit follows the gas
+    (tracer limit) instead of making the explicit drag update unstable."""
     cic, corner, weight = make_cic(gg)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
@@ -94,6 +97,9 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 d = 2.0 * S.radius[i]
                 w = (u - S.v[i]).norm()
                 k = drag_coefficient(eps, d, w)
+                if ti.static(tracer_dt > 0.0):
+                    if S.rx[i] >= 0:
+                        k = ti.min(k, 0.5 * S.mass[i] / tracer_dt)
                 S.gK[i] = k
                 S.geps[i] = eps
                 ti.atomic_max(rate, k * S.inv_mass[i])

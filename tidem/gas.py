@@ -189,7 +189,8 @@ class GasPhase:
                                       gas.density * gas.heat_capacity, self.sources)
         self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
-            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species)
+            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
+            model.dt if self.sources else 0.0)
         if self.species:
             from tidem.reactions import o2_mass_fraction
 

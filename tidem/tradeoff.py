@@ -15,6 +15,8 @@ Scalar observables (`scalar_observables`), from each run's run.json and timeseri
   bed_height_m       99th percentile of particle heights in the last snapshot
   kinetic_energy_J   kinetic energy at the end
   contact_time_s     mean first-contact duration over particles that touched
+  GROUP_KEY          every number of run.json observables.reactions[GROUP] (e.g.
+                     powder_fraction_sublimated, char_T_mean_K)
 Relative error = |value - reference| / |reference| (absolute when the reference is 0).
 """
 
@@ -84,6 +86,10 @@ def scalar_observables(run_dir: Path) -> dict[str, float]:
     obs = run.get("observables", {})
     for row in obs.get("tube_mean_alpha", []):
         out[f"tube{row['tube']}_mean_alpha_W_m2K"] = float(row["mean_alpha_W_m2K"])
+    for group, figures in obs.get("reactions", {}).items():
+        for key, value in figures.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                out[f"{group}_{key}"] = float(value)
     times = [r["contact_time_s"] for r in obs.get("contact_time", []) if r.get("contact_time_s")]
     if times:
         out["contact_time_s"] = float(np.mean(times))
