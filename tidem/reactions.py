@@ -13,6 +13,9 @@ import math
 
 import numpy as np
 
+from tidem.kernels.reactions import (CHAR, ESCAPED, GONE, LATENT, MASS_ESCAPED, O2_USED, POLY,  # noqa: F401
+                                     REACTED, SUBL, ENTHALPY_OUT, HEAT_RELEASED)
+
 R_GAS = 8.314462618  # J/(mol K)
 M_C = 0.012011  # kg/mol
 M_O2 = 0.031998  # kg/mol
@@ -20,12 +23,9 @@ H_CO2 = 393.5e3  # J/mol C, C + O2 -> CO2
 H_CO = 110.5e3  # J/mol C, C + 1/2 O2 -> CO
 MAX_FRACTION = 0.01  # largest share of a particle's mass one step may consume or add
 
-CHAR, POLY, SUBL = 0, 1, 2
 KIND_IDS = {"char_combustion": CHAR, "polymerization": POLY, "sublimation": SUBL}
 
-# S.rsum slots (float64 accumulators of the reaction kernel)
-REACTED, O2_USED, HEAT_RELEASED, LATENT, ENTHALPY_OUT, REFUND, GONE, ESCAPED, MASS_ESCAPED = range(9)
-N_SUMS = 9
+N_SUMS = 9  # S.rsum slots, named in kernels/reactions.py
 
 
 def o2_mass_fraction(mole_fraction: float, molar_mass: float) -> float:
