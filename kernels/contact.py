@@ -23,7 +23,7 @@ from .heat import pfp_conductance, spot_conductance, wall_conductance
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
-                      angle_bins: int = 0, fluid_layer: float = 0.0):
+                      angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True):
     """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
     the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
@@ -32,7 +32,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     `fluid_layer` > 0 adds particle-fluid-particle conduction between neighbours closer than
     fluid_layer * min(r_i, r_j), touching or not, and between a surface with a temperature and
     a particle within fluid_layer * r_i of it that does not touch it (R* = r_i; a touching one
-    conducts by Schluender's coefficient instead)."""
+    conducts by Schluender's coefficient instead). `pairs = False` (contact.model = 'none') skips the
+    neighbour list: gravity and walls only."""
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
@@ -103,7 +104,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 touching = 0
                 heat_in = 0.0
                 p_same = S.pp[0, 0]
-                for k in range(S.nbr_n[i]):
+                n_pairs = S.nbr_n[i]
+                if ti.static(not pairs):
+                    n_pairs = 0
+                for k in range(n_pairs):
                     j = S.nbr[i, k]
                     d = min_image(S.x[j] - xi)
                     rj = S.radius[j]

@@ -43,8 +43,8 @@ ESTAR, GSTAR, GAMMA, KAPPA, MU_S, MU_D, MU_R, ETA_R, UNLOAD_RATIO, E_I, E_J = ra
 K_EFF, A_CORR, LAMBDA_GAS, GAP = range(11, 15)
 N_PARAMS = 15
 
-LINEAR, HERTZ, HYSTERETIC = 0, 1, 2
-LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC}
+LINEAR, HERTZ, HYSTERETIC, NONE = 0, 1, 2, 3
+LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC, "none": NONE}
 
 
 @ti.func

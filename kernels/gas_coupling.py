@@ -8,7 +8,7 @@ At each gas step (every `coupling_interval` DEM steps):
                   (`drag.make_nusselt`) are frozen until the next gas step; K_p w_pf is added
                   to face f's implicit drag coefficient B_f and K_p w_pf v_p to Bv_f, and with
                   heat H_p w_pc to the cell's H_c and H_p w_pc T_p to HT_c.
-  sample:         after the gas step, u_p, grad p_p and T_g,p at each particle.
+  sample:         after the gas step, u_p, grad p_p and T_g,p (and Y_O2,p) at each particle.
 Every DEM step (`add_gas_forces`): f_p += K_p (u_p - v_p) - V_p grad p_p (source 1, Tsuji
 form, the gas carrying -eps grad p), and q_p += H_p (T_g,p - T_p).
 Because interpolation and deposition share weights that sum to 1, the drag the gas feels,
@@ -25,8 +25,13 @@ from .gas_grid import make_cic
 
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
-                          heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026):
-    """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n)) for particles S and gas G."""
+                          heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
+                          species: bool = False, tracer_dt: float = 0.0):
+    """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n)) for particles S and gas G;
+    with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
+    `tracer_dt` (the DEM step, scenes with reactions) a reacting particle's drag coefficient is
+    capped at m / (2 dt): one that shrank below the drag relaxation limit follows the gas
+    (tracer limit) instead of making the explicit drag update unstable."""
     cic, corner, weight = make_cic(gg)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
@@ -94,6 +99,9 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 d = 2.0 * S.radius[i]
                 w = (u - S.v[i]).norm()
                 k = drag_coefficient(eps, d, w)
+                if ti.static(tracer_dt > 0.0):
+                    if S.rx[i] >= 0:
+                        k = ti.min(k, 0.5 * S.mass[i] / tracer_dt)
                 S.gK[i] = k
                 S.geps[i] = eps
                 ti.atomic_max(rate, k * S.inv_mass[i])
@@ -125,6 +133,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 S.ggp[i] = sample_faces(GP, x)
                 if ti.static(heat):
                     S.gT[i] = sample_cells(G.T, x)
+                if ti.static(species):
+                    S.gY[i] = sample_cells(G.Y, x)
 
     @ti.kernel
     def add_gas_forces(n: ti.i32):

@@ -27,6 +27,7 @@ borders (`tube_convection`): h_w = Nu k_g / D, Churchill & Bernstein (1977) for 
 cross flow, Nu = 0.3 + 0.62 Re^1/2 Pr^1/3 / [1 + (0.4/Pr)^2/3]^1/4 [1 + (Re/282000)^5/8]^4/5,
 Re = rho |u| D / mu at the cell's gas velocity. The heat each tube gives the gas is summed
 into wall_rate [W] and, over time, wall_energy [J].
+  (+ Qs / dt, heat handed back by particles that reacted away, with reactions).
 """
 
 import taichi as ti
@@ -38,9 +39,10 @@ SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread 
 
 
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
-                      tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7):
+                      tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas`); `tube_walls`
-    adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy)."""
+    adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy),
+    `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum)."""
     cic, corner, weight = make_cic(gg)
     n = gg.cells
     small = n[0] * n[1] * n[2] <= SERIAL_CELLS
@@ -337,43 +339,61 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
         nu_w = 0.3 + 0.62 * ti.sqrt(re) * pr3 / cb_denominator * (1.0 + (re / 282000.0) ** 0.625) ** 0.8
         return nu_w * k_gas / d * G.eps[I] * G.wall_A[I]
 
+    @ti.func
+    def upwind(F: ti.template(), I, f_in):
+        """Sum over the faces of cell I of (eps u)_f A_f F_up (outward positive) [unit of F m^3/s],
+        and the part of it through the inlet and outlet faces; F_up is the upwind cell's value,
+        f_in on inlet faces and the cell's own value on outflow (or backflow) at the outlet."""
+        net = 0.0
+        boundary = 0.0
+        for c in ti.static(range(3)):
+            e = unit(c)
+            for side in ti.static((0, 1)):
+                f = I
+                if ti.static(side == 1):
+                    f = face_index(I + e, c)
+                kind = K[c][f]
+                if kind != CLOSED:
+                    flux = face_eps(f, c) * U[c][f] * area[c]
+                    if ti.static(side == 0):
+                        flux = -flux
+                    f_up = F[I]
+                    if kind == INLET:
+                        f_up = f_in
+                    elif flux < 0.0 and kind == INTERIOR:
+                        nb = I - e
+                        if ti.static(side == 1):
+                            nb = I + e
+                        f_up = F[cell_index(nb)]
+                    net += flux * f_up
+                    if kind != INTERIOR:
+                        boundary += flux * f_up
+        return net, boundary
+
     @ti.kernel
     def energy(dt: ti.f64, t_in: ti.f64):
-        """Upwind advection of eps T with implicit particle and tube exchange (module docstring)."""
+        """Upwind advection of eps T with implicit particle and tube exchange (module docstring);
+        with `sources`, plus the heat Qs [J] particles handed to the gas, and the enthalpy that
+        entered through the inlet and outlet summed in bsum[0] [J]."""
         if ti.static(tube_walls):
             for k in G.wall_rate:
                 G.wall_rate[k] = 0.0
         for I in ti.grouped(G.T):
             G.T_new[I] = G.T[I]
             if G.solid[I] == 0:
-                net = 0.0  # sum over faces of rho c (eps u)_f A_f T_up, outward positive
-                for c in ti.static(range(3)):
-                    e = unit(c)
-                    for side in ti.static((0, 1)):
-                        f = I
-                        if ti.static(side == 1):
-                            f = face_index(I + e, c)
-                        kind = K[c][f]
-                        if kind != CLOSED:
-                            flux = face_eps(f, c) * U[c][f] * area[c]
-                            if ti.static(side == 0):
-                                flux = -flux
-                            t_up = G.T[I]
-                            if kind == INLET:
-                                t_up = t_in
-                            elif flux < 0.0 and kind == INTERIOR:
-                                nb = I - e
-                                if ti.static(side == 1):
-                                    nb = I + e
-                                t_up = G.T[cell_index(nb)]
-                            net += flux * t_up
+                net, boundary = upwind(G.T, I, t_in)
+                extra = 0.0
+                if ti.static(sources):
+                    extra = G.Qs[I]
+                    G.Qs[I] = 0.0
+                    G.bsum[0] += -dt * rho_c * boundary
                 hw = 0.0  # tube convection conductance [W/K] and its heat source hw T_w [W]
                 hw_tw = 0.0
                 if ti.static(tube_walls):
                     if G.wall_A[I] > 0.0:
                         hw = wall_conductance(I)
                         hw_tw = hw * G.wall_T[I]
-                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw_tw)) \
+                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw_tw) + extra) \
                     / (rho_c * G.eps[I] * vol + dt * (G.H[I] + hw))
                 if ti.static(tube_walls):
                     if hw > 0.0:
@@ -387,4 +407,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                    cg_direction=cg_direction, cg_serial=cg_serial, correct=correct, divergence=divergence, courant=courant)
     if heat:
         kernels["energy"] = energy
+    kernels["upwind"] = upwind
+    kernels["face_eps"] = face_eps
+    kernels["cell_index"] = cell_index
+    kernels["face_index"] = face_index
     return kernels

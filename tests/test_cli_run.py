@@ -103,7 +103,8 @@ def test_check_prints_derived_numbers():
 
 
 @pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml", "moving_bed_ta1.toml",
-                                  "moving_bed_ta2.toml", "fluidized_tube.toml"])
+                                  "moving_bed_ta2.toml", "fluidized_tube.toml", "char_combustion.toml",
+                                  "olefin_polymerization.toml", "plasma_sublimation.toml"])
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name

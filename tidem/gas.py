@@ -20,6 +20,7 @@ from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET, SERIAL_CELLS, make_flow_kernels
 from tidem.kernels.gas_grid import GasGrid
+from tidem.kernels.species import make_species_kernel
 
 MAX_COURANT = 0.5
 
@@ -177,6 +178,8 @@ class GasPhase:
         self.gas = gas
         self.gg = gg = gas_grid(scene)
         self.heat = model.features.heat
+        self.species = model.features.species
+        self.sources = bool(model.features.reactions)
         self.interval = gas.coupling_interval
         self.dt = gas.coupling_interval * model.dt
         self.tol = max(gas.tolerance, 1e-5 if fp == ti.f32 else 0.0)
@@ -189,6 +192,10 @@ class GasPhase:
         cell_names = ["eps", "eps_old", "solid_vol", "p", "rhs", "diag", "cg_r", "cg_d", "cg_q"]
         if self.heat:
             cell_names += ["T", "T_new", "H", "HT"]
+        if self.sources:
+            cell_names += ["Qs"]
+        if self.species:
+            cell_names += ["Y", "Y_new", "o2_sink"]
         for name in cell_names:
             setattr(G, name, ti.field(fp))
             fb.dense(ti.ijk, gg.cells).place(getattr(G, name))
@@ -215,6 +222,9 @@ class GasPhase:
             G.wall_rate = ti.field(fp)
             G.wall_energy = ti.field(ti.f64)
             fb.dense(ti.i, len(model.tubes)).place(G.wall_rate, G.wall_energy)
+        if self.sources:  # enthalpy [J] and O2 [kg] that entered through inlet and outlet; most negative Y
+            G.bsum = ti.field(ti.f64)
+            fb.dense(ti.i, 3).place(G.bsum)
         self._tree = fb.finalize()
         self.G = G
         G.solid.from_numpy(self.solid)
@@ -228,10 +238,19 @@ class GasPhase:
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
-                                      gas.heat_capacity * gas.viscosity / k_gas)
+                                      gas.heat_capacity * gas.viscosity / k_gas, self.sources)
         self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
-            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas)
+            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
+            model.dt if self.sources else 0.0)
+        if self.species:
+            from tidem.reactions import o2_mass_fraction
+
+            ox = gas.oxygen
+            self._species = make_species_kernel(gg, G, self.flow, gas.density, ox.diffusivity)
+            self.y_in = o2_mass_fraction(ox.mole_fraction, ox.molar_mass)
+            x0 = ox.mole_fraction if ox.initial_mole_fraction is None else ox.initial_mole_fraction
+            G.Y.fill(o2_mass_fraction(x0, ox.molar_mass))
         if self.heat:
             T0 = gas.initial_temperature or scene.heat.initial_temperature
             G.T.fill(T0)
@@ -276,6 +295,12 @@ class GasPhase:
                 f"lower gas.coupling_interval (now {self.interval})")
         if self.heat:
             f["energy"](dt, self.t_in)
+        if self.species:
+            self._species(dt, self.y_in)
+            if self.G.bsum[2] < 0.0:
+                raise GasError(
+                    f"the particles took more O2 from a gas cell than it held within one gas step at t = {t:.6g} s: "
+                    f"lower gas.coupling_interval (now {self.interval}) or numerics.dt")
         self.divergence = f["divergence"](dt)
         self._sample(self.n)
         self.steps += 1
@@ -336,6 +361,13 @@ class GasPhase:
                 if tube["T"] is not None:
                     out[f"tubes{k}_gas_heat_W"] = float(rate[k])
         return out
+
+    def mean_o2_mole_fraction(self) -> float:
+        """Mean O2 mole fraction over the fluid cells."""
+        from tidem.reactions import M_O2
+
+        y = self.G.Y.to_numpy()[self.solid == 0]
+        return float(y.mean() * self.gas.oxygen.molar_mass / M_O2)
 
     def release(self) -> None:
         if self._tree is not None:

@@ -37,10 +37,20 @@ class Features:
     precision: str
     heat: bool = False
     gas: bool = False
+    reactions: tuple[str, ...] = ()  # reaction types, in scene order
+    species: bool = False  # O2 transported on the gas grid (char combustion)
+
+    @property
+    def contacts(self) -> bool:
+        """False for contact.model = 'none': no neighbour search and no contact forces."""
+        return self.law != cl.NONE
 
     def kernels(self) -> list[str]:
-        law = {cl.LINEAR: "linear", cl.HERTZ: "hertz_mindlin", cl.HYSTERETIC: "hysteretic"}[self.law]
-        out = ["integrate", "broadphase(cell grid + Verlet list)", f"contact({law}, tangential history)"]
+        if self.contacts:
+            law = {cl.LINEAR: "linear", cl.HERTZ: "hertz_mindlin", cl.HYSTERETIC: "hysteretic"}[self.law]
+            out = ["integrate", "broadphase(cell grid + Verlet list)", f"contact({law}, tangential history)"]
+        else:
+            out = ["integrate", "no contacts (gravity and gas forces only)"]
         if self.rolling:
             out.append("rolling resistance (model C)")
         if self.n_planes:
@@ -53,9 +63,14 @@ class Features:
             out.append("contact-time observer")
         if self.heat:
             out.append("heat (contact-spot conduction, gas-lens conduction between neighbours, "
-                       "wall/tube conduction after Schluender)")
+                       "wall/tube conduction after Schluender)" if self.contacts
+                       else "heat (particle temperatures; no conduction without contacts)")
         if self.gas:
             out.append("gas (voidage, drag, pressure projection" + (", gas energy)" if self.heat else ")"))
+        if self.species:
+            out.append("O2 transport on the gas grid")
+        for kind in dict.fromkeys(self.reactions):
+            out.append(f"reaction: {kind.replace('_', ' ')}")
         return out
 
 
@@ -94,6 +109,8 @@ class Model:
     angle_bins: int = 0
     fluid_layer: float = 0.0  # particle-fluid-particle lens thickness / smaller radius (0: off)
     heat_reach: float = 0.0  # extra neighbour-list reach for that lens [m]
+    reaction_index: np.ndarray | None = None
+    reaction_constants: list | None = None
 
     @property
     def scene(self):
@@ -113,13 +130,16 @@ class Model:
         if self.features.heat:
             per += 3 * fp
         if self.features.gas:
-            per += fp * (8 + (2 if self.features.heat else 0))
+            per += fp * (8 + (2 if self.features.heat else 0) + self.features.species)
+        if self.features.reactions:
+            per += 4 + 2 * fp
         cells = self.grid.n_cells * 4 * 3
         if self.features.gas:
             from tidem.gas import gas_grid
 
             gas_cells = int(np.prod(gas_grid(self.scene).cells))
-            cells += gas_cells * (fp * (9 + 4 * self.features.heat + 8 * 3) + 4 * 4)
+            cells += gas_cells * (fp * (9 + 4 * self.features.heat + 8 * 3 + bool(self.features.reactions)
+                                        + 3 * self.features.species) + 4 * 4)
         return per * self.capacity + cells
 
     def peak_memory_bytes(self) -> int:
@@ -441,12 +461,14 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         if scales is None or ts.limit < scales.limit:
             scales = ts
     num = scene.numerics
-    soft = _too_soft(scene, law, mats, mat_names, material, radius, np.concatenate(x0), np.concatenate(active0), speed)
+    contacts = law != "none"
+    soft = contacts and _too_soft(scene, law, mats, mat_names, material, radius, np.concatenate(x0),
+                                  np.concatenate(active0), speed)
     if soft:
         raise SceneError(src, soft)
     if num.dt is not None:
         dt = num.dt
-        if dt > scales.limit and not num.force_dt:
+        if dt > scales.limit and not num.force_dt and contacts:
             raise SceneError(src, [
                 f"numerics.dt: {dt:g} s is above the stability limit {scales.limit:.3g} s of the stiffest contact "
                 f"(Rayleigh time {scales.rayleigh:.3g} s, contact time {scales.contact:.3g} s); use dt <= {scales.limit:.3g}, "
@@ -470,6 +492,8 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     grid = Grid(lo=tuple(dom.min), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
     ratio = d_max / d_min
     k = num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + num.skin + 0.5 * fluid_layer) ** 3))
+    if not contacts:
+        k = 1  # no neighbour list is built
 
     features = Features(
         law=cl.LAW_IDS[law],
@@ -482,6 +506,8 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         precision=num.precision,
         heat=scene.heat is not None,
         gas=scene.gas is not None,
+        reactions=tuple(r.type for r in scene.reactions),
+        species=any(r.type == "char_combustion" for r in scene.reactions),
     )
     heat_cap = temperature0 = thermal_limit = None
     if scene.heat is not None:
@@ -491,8 +517,8 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         if scene.heat.fluid_layer > 0 and scene.heat.gas_mean_free_path + scene.heat.roughness <= 0:
             raise SceneError(src, ["heat.roughness: gas conduction between neighbours needs a smallest gap "
                                    "gas_mean_free_path + roughness > 0 (got 0); set roughness (e.g. 1e-6) or fluid_layer = 0"])
-        thermal_limit = _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, k)
-        if dt > thermal_limit:
+        thermal_limit = _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, k) if contacts else None
+        if contacts and dt > thermal_limit:
             raise SceneError(src, [
                 f"heat: the time step {dt:.3g} s exceeds the explicit conduction limit {thermal_limit:.3g} s "
                 "(min over particles of m c / sum of contact conductances); raise materials.*.heat_capacity, "
@@ -503,6 +529,15 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         gas_errors = gas_step_checks(scene, dt, radius, density)
         if gas_errors:
             raise SceneError(src, gas_errors)
+    rx = rconst = None
+    if scene.reactions:
+        from tidem.reactions import reaction_constants, reaction_index, reaction_step_checks
+
+        rx = reaction_index(scene, np.concatenate(group))
+        rconst = reaction_constants(scene)
+        reaction_errors = reaction_step_checks(scene, dt, radius, density, rx)
+        if reaction_errors:
+            raise SceneError(src, reaction_errors)
     end = t_end if t_end is not None else num.t_end
     if smoke:
         end = min(end, scene.output.smoke_steps * dt)
@@ -510,10 +545,12 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         name=loaded.name, loaded=loaded, features=features, grid=grid, capacity=len(radius), radius=radius, mass=mass,
         material=material, group=np.concatenate(group), x0=np.concatenate(x0), v0=np.concatenate(v0),
         active0=np.concatenate(active0), pair_params=pair, surface_params=surf, planes=planes, tubes=tubes,
-        pours=pours, dt=dt, scales=scales, skin=skin, max_neighbors=k, wall_slots=num.max_wall_contacts,
+        pours=pours, dt=dt, scales=scales, skin=skin, max_neighbors=k,
+        wall_slots=num.max_wall_contacts if contacts else 1,
         t_end=end, gravity=tuple(dom.gravity), fixed=fixed, temperature0=temperature0, heat_capacity=heat_cap,
         thermal_limit=thermal_limit, fluid_layer=fluid_layer, heat_reach=heat_reach,
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(t["T"] for t in tubes) else 0,
+        reaction_index=rx, reaction_constants=rconst,
     )
     too_big = memory_refusal(model)
     if too_big:

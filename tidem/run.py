@@ -21,6 +21,8 @@ from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
 from tidem.render.plots import read_series
+from tidem.reaction_output import ReactionLog
+from tidem.reactions import reaction_summary
 from tidem.render.settings import render_settings
 from tidem.solver import RunError, Solver
 
@@ -56,6 +58,7 @@ class Output:
         else:
             (self.dir / "snapshots.pvd").unlink(missing_ok=True)
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
+        self.reactions = ReactionLog(self.dir, model) if model.features.reactions else None
 
     def snapshot(self, solver: Solver) -> Path:
         """Write the next snapshot and list it in snapshots.pvd; returns its file."""
@@ -84,6 +87,9 @@ class Output:
             row.update(solver.heat_summary())
         if solver.gas is not None:
             row.update(solver.gas.summary())
+        if self.reactions is not None:
+            row.update(reaction_summary(solver))
+            self.reactions.sample(solver)
         for p in self.model.planes:
             if p["name"] == "outlet plate":
                 t0, t1 = p["t"]
@@ -315,5 +321,11 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             data["resumed_from"] = checkpoint.describe(resume[0])
         if status == "finished":
             data.update(observed(model, solver, out.series.path))
+        if out.reactions is not None:  # per reaction group, and flat in observables for tradeoff/sweep
+            figures = out.reactions.finish(solver)
+            data["reactions"] = figures
+            data.setdefault("observables", {})["reactions"] = {
+                f"{group}_{key}": value for group, values in figures.items() for key, value in values.items()
+                if isinstance(value, (int, float)) and not isinstance(value, bool)}
         out.write_summary(data)
     return RunResult(status=status, out_dir=Path(out_dir), steps=solver.steps, wall_s=wall, message=message, summary=data)

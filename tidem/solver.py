@@ -3,7 +3,8 @@
 `step()` is a short list of kernel launches and makes no physics decisions: kick-drift,
 neighbour rebuild when a particle moved more than half the skin (or particles appeared),
 a gas step every `gas.coupling_interval` steps (scenes with gas), forces (contacts, then
-drag and pressure-gradient force), kick. Health checks (NaN, runaway overlap, capacity overflow) run every
+drag and pressure-gradient force), reactions (with a rebuild when a particle burnt out or
+left), kick. Health checks (NaN, runaway overlap, capacity overflow) run every
 `numerics.check_interval` steps and raise `RunError` naming the particle and the fix.
 """
 
@@ -13,6 +14,8 @@ import numpy as np
 import taichi as ti
 
 from tidem.kernels.broadphase import make_neighbor_builder
+from tidem.kernels.contact_laws import LINEAR
+from tidem.kernels.reactions import make_reaction_kernel
 from tidem.kernels.contact import make_force_kernel
 from tidem.kernels.diagnostics import make_energy_kernel
 from tidem.kernels.integrate import make_integrators
@@ -40,11 +43,14 @@ class Solver:
         self.t = 0.0
         self.steps = 0
         self.rebuilds = 0
-        self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach, f.rolling,
-                                              f.hysteretic, S)
-        self._forces = make_force_kernel(model.grid, f.law, f.rolling, f.n_planes, f.n_tubes, model.wall_slots,
-                                         model.gravity, S, f.contact_time, model.pair_params.shape[0] == 1,
-                                         f.heat, model.angle_bins, model.fluid_layer)
+        self._rebuild = None
+        if f.contacts:
+            self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
+                                                  f.rolling, f.hysteretic, S)
+        self._forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes,
+                                         f.n_tubes, model.wall_slots, model.gravity, S, f.contact_time,
+                                         model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
+                                         f.contacts)
         self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
                                                         model.angle_bins)
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
@@ -57,6 +63,13 @@ class Solver:
         self.gas = None
         if f.gas:
             self.gas = GasPhase(model, S, ti.f64 if f.precision == "float64" else ti.f32)
+        self._react = None
+        if f.reactions:
+            G = self.gas.G if self.gas is not None else None
+            gas = model.scene.gas
+            self._react = make_reaction_kernel(model.reaction_constants, S, self.gas.gg if G else None, G,
+                                               gas.density if gas else 1.0, gas.viscosity if gas else 1.0,
+                                               model.wall_slots)
         self._check_every = model.scene.numerics.check_interval
         self.start()
 
@@ -64,8 +77,7 @@ class Solver:
         """First neighbour build and force evaluation (so that step() can begin with a kick)."""
         if self.pourer is not None:
             self.pourer.insert(self.t)
-        self._rebuild(self.n)
-        self.rebuilds += 1
+        self.rebuild()
         if self.gas is not None:
             self._gas_step()
         self._forces(self.n, self.t, self.dt)
@@ -84,13 +96,16 @@ class Solver:
         if self.pourer is not None:
             need |= self.pourer.insert(self.t) > 0
         if need:
-            self._rebuild(self.n)
-            self.rebuilds += 1
+            self.rebuild()
         if self.gas is not None and self.steps % self.gas.interval == 0:
             self._gas_step()
         self._forces(self.n, self.t, dt)
         if self.gas is not None:
             self.gas.add_forces(self.n)
+        if self._react is not None:
+            left = self.gas.interval - 1 - self.steps % self.gas.interval if self.gas is not None else 0
+            if self._react(self.n, self.t, dt, left) > 0:
+                self.rebuild()  # partners of a removed particle drop it (and their history with it) at once
         self._kick(self.n, dt)
         if self.steps % self._check_every == 0:
             self.check()
@@ -99,6 +114,12 @@ class Solver:
             if self.gas is not None and self.gas.walls:
                 self.gas.G.wall_energy.fill(0.0)
             self.profile_t0 = self.t
+
+    def rebuild(self) -> None:
+        """Neighbour list (none with contact.model = 'none')."""
+        if self._rebuild is not None:
+            self._rebuild(self.n)
+            self.rebuilds += 1
 
     def _gas_step(self) -> None:
         try:

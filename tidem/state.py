@@ -19,6 +19,12 @@ into the bed [W]) and surf_energy (its time integral [J]).
 With gas (frozen between gas steps, see kernels/gas_coupling.py): gK (drag coefficient
 [kg/s]), geps (voidage), gu (gas velocity [m/s]) and ggp (pressure gradient [Pa/m]) at the
 particle; with heat also gH (gas-particle conductance [W/K]) and gT (gas temperature [K]).
+With species (O2 on the gas grid): gY (O2 mass fraction of the gas at the particle).
+With reactions: rx (index of the particle's reaction, -1 = inert), rsum (float64 totals of
+`kernels/reactions.py`: reacted mass [kg], O2 used [kg], heat released [J], latent heat [J],
+sensible heat leaving with reacted mass [J], heat handed back to the gas [J], particles gone,
+particles escaped, escaped mass [kg]); with sublimation rt0 (time first seen [s]) and rt1
+(time sublimated away [s], minus the time it left through the exit, 0 while present).
 Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax;
 wmask [capacity]: bit s set while surface s holds one of the particle's slots.
 """
@@ -117,6 +123,16 @@ def allocate(model: Model) -> State:
         if feat.heat:
             for name in ("gH", "gT"):
                 place((N,), name)
+        if feat.species:
+            place((N,), "gY")
+    if feat.reactions:
+        from tidem.reactions import N_SUMS
+
+        place((N,), "rx", ti.i32)
+        place((N_SUMS,), "rsum", ti.f64)
+        if "sublimation" in feat.reactions:
+            place((N,), "rt0")
+            place((N,), "rt1")
     place((2,), "overflow", ti.i32)
     place((5,), "sums")
     S._tree = fb.finalize()
@@ -140,6 +156,11 @@ def allocate(model: Model) -> State:
             S.tube_side.from_numpy(np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0]
                                              for t in model.tubes]))
     S.mat.from_numpy(model.material)
+    if feat.reactions:
+        S.rx.from_numpy(model.reaction_index)
+        if "sublimation" in feat.reactions:
+            S.rt0.fill(-1.0)
+            S.rt1.fill(0.0)
     S.active.from_numpy(model.active0.astype(np.int32))
     S.wid.fill(-1)
     if feat.contact_time:

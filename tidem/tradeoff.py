@@ -10,6 +10,8 @@ one that paid most for accuracy: the most time steps, then the longest wall time
 Observables: the scene's declared ones (`observables = [...]`, or `--observables` as an
 override), computed by each run from the registry in `tidem.observables` and read back from
 its run.json, one column per value (e.g. `bed_height_m`, `tubes1_heat_W`).
+Reaction figures (run.json `reactions`) join as GROUP_KEY columns (e.g.
+powder_fraction_sublimated, char_T_mean_K).
 Relative error = |value - reference| / |reference| (absolute when the reference is 0).
 """
 

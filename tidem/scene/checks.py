@@ -81,6 +81,57 @@ def observable_checks(scene: Scene) -> list[str]:
     return [f"observables: '{name}' {need}" for name in scene.observables if (need := requirement(name, scene))]
 
 
+def reaction_checks(scene: Scene) -> list[str]:
+    """Each reaction names one particle group (one reaction per group) and has the phases it
+    needs: heat for all, the gas for char combustion (with gas.oxygen) and sublimation."""
+    errs: list[str] = []
+    names = [g.name for g in scene.particles]
+    seen: dict[str, int] = {}
+    for i, r in enumerate(scene.reactions):
+        key = f"reactions[{i}]"
+        if r.group not in names:
+            errs.append(f"{key}.group: no particle group named '{r.group}'; groups: {', '.join(names)}")
+        elif r.group in seen:
+            errs.append(f"{key}.group: group '{r.group}' already reacts in reactions[{seen[r.group]}]; one reaction per group")
+        seen.setdefault(r.group, i)
+        if scene.heat is None:
+            errs.append(f"{key}: a {r.type} reaction needs a [heat] table (its heat goes into particle temperatures)")
+        if r.type in ("char_combustion", "sublimation") and scene.gas is None:
+            errs.append(f"{key}: a {r.type} reaction needs a [gas] table (it exchanges heat and species with the gas)")
+        if r.type == "char_combustion" and scene.gas is not None and scene.gas.oxygen is None:
+            errs.append(f"{key}: char combustion needs the oxygen the gas carries; add gas.oxygen = "
+                        "{ mole_fraction = 0.21 }")
+        if r.type == "sublimation" and r.exit_height is not None:
+            lo, hi = scene.domain.min[2], scene.domain.max[2]
+            if not lo < r.exit_height <= hi:
+                errs.append(f"{key}.exit_height: {r.exit_height} lies outside the domain's z range {lo}..{hi}")
+    if scene.gas is not None and scene.gas.oxygen is not None and not any(
+            r.type == "char_combustion" for r in scene.reactions):
+        errs.append("gas.oxygen: only char combustion uses the oxygen; add a [[reactions]] table with "
+                    "type = \"char_combustion\" or remove gas.oxygen")
+    return errs
+
+
+def no_contact_checks(scene: Scene) -> list[str]:
+    """contact.model = 'none' (dilute, collision-free suspensions) has no walls to stop particles
+    and no contact time to set the step."""
+    if scene.contact.model != "none":
+        return []
+    errs = []
+    if scene.domain.wall_sides():
+        errs.append("contact.model: 'none' builds no contact forces, so particles would pass through the box walls; "
+                    "set domain.walls = \"none\" (or choose a contact law)")
+    for key in ("walls", "tubes"):
+        if getattr(scene, key):
+            errs.append(f"{key}: contact.model = 'none' computes no wall or tube contacts; remove them or choose a contact law")
+    if scene.outlet is not None and scene.outlet.type == "moving_plate":
+        errs.append("outlet: a moving plate needs contacts; remove it or choose a contact law")
+    if scene.numerics.dt is None:
+        errs.append("numerics.dt: contact.model = 'none' has no contact time to derive the step from; set numerics.dt "
+                    "(e.g. a tenth of the drag relaxation time)")
+    return errs
+
+
 def cross_checks(scene: Scene) -> list[str]:
     """All problems that a single table cannot see, as 'key.path: message' lines."""
     errs: list[str] = []
@@ -164,6 +215,8 @@ def cross_checks(scene: Scene) -> list[str]:
     errs += heat_checks(scene)
     errs += gas_checks(scene)
     errs += observable_checks(scene)
+    errs += reaction_checks(scene)
+    errs += no_contact_checks(scene)
 
     dmax = max_diameter(scene)
     cell = dmax * (1.0 + scene.numerics.skin)

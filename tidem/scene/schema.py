@@ -8,7 +8,7 @@ Checks that span tables (a tube outside the domain, an unknown material name) li
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -191,7 +191,7 @@ class Outlet(Strict):
 class Contact(Strict):
     """The contact law between particles and with walls and tubes."""
 
-    model: Literal["hertz_mindlin", "linear", "hysteretic"] = "hertz_mindlin"
+    model: Literal["hertz_mindlin", "linear", "hysteretic", "none"] = "hertz_mindlin"
 
 
 class Numerics(Strict):
@@ -249,6 +249,16 @@ class Nozzle(Strict):
         return self
 
 
+class Oxygen(Strict):
+    """O2 carried by the gas as a transported mass fraction (needed by char combustion)."""
+
+    mole_fraction: Number = Field(ge=0.0, le=1.0)
+    initial_mole_fraction: Number | None = Field(default=None, ge=0.0, le=1.0)
+    diffusivity: Positive = 2.0e-4
+    molar_mass: Positive = 0.02897
+    pressure: Positive = 101325.0
+
+
 class Gas(Strict):
     """The gas phase: locally averaged incompressible flow coupled to the particles."""
 
@@ -268,6 +278,43 @@ class Gas(Strict):
     tolerance: Positive = 1e-8
     max_iterations: int = Field(default=2000, ge=1)
     min_voidage: Number = Field(default=0.3, gt=0, lt=1)
+    oxygen: Oxygen | None = None
+
+
+class CharCombustion(Strict):
+    """C + O2 at the surface of each particle of a group, kinetics in series with the gas film."""
+
+    type: Literal["char_combustion"]
+    group: str
+    pre_exponential: Positive = 0.8596
+    activation_energy: Positive = 1.494e5
+    co_fraction: Number = Field(default=0.0, ge=0.0, le=1.0)
+    burnout: Literal["shrink", "density"] = "shrink"
+
+
+class Polymerization(Strict):
+    """Heat of polymerization released in each catalyst particle of a group."""
+
+    type: Literal["polymerization"]
+    group: str
+    rate_constant: Positive
+    monomer_pressure: Positive
+    activation_energy: NonNegative = 0.0
+    reference_temperature: Positive = 353.15
+    enthalpy: Positive = 3.34e6
+
+
+class Sublimation(Strict):
+    """Particles of a group at their sublimation temperature turn the heat they receive into vapour."""
+
+    type: Literal["sublimation"]
+    group: str
+    temperature: Positive
+    latent_heat: Positive
+    exit_height: Number | None = None
+
+
+Reaction = Annotated[CharCombustion | Polymerization | Sublimation, Field(discriminator="type")]
 
 
 class Render(Strict):
@@ -307,6 +354,7 @@ class Scene(Strict):
     render: Render = Render()
     heat: Heat | None = None
     gas: Gas | None = None
+    reactions: list[Reaction] = []
     observables: list[str] = []
 
     @field_validator("observables")

@@ -1,0 +1,183 @@
+"""Reacting particles: char combustion, polymerization heat and sublimation (one kernel, run
+every DEM step after the forces and the gas exchange, before the kick that advances T).
+
+Char combustion (source 1: R_p = k exp(-E/(R T_p)) ... with the sign fixed; kinetics of
+Field 1969, Combust. Flame 13, 237: k_s = 8710 exp(-17967 K / T_p) g/(cm^2 s atm) =
+0.8596 exp(-E/(R T_p)) kg C/(m^2 s Pa), E = 149.4 kJ/mol), in series with the gas film
+(Baum & Street 1971 form):
+    carbon rate  m_dot = pi d^2 p_O2 / (1/k_s + 1/k_d),    p_O2 = Y M_gas / M_O2 P,
+    film         k_d = (M_C / nu) Sh D / (d R T_f),  T_f = (T_p + T_g)/2,
+                 Sh = 2 + 0.6 Re^1/2 Sc^1/3 (Ranz-Marshall analogy), Re = rho_g |u - v| d / mu,
+                 Sc = mu / (rho_g D); nu = 1 - phi/2 mol O2 per mol C (phi = co_fraction).
+  The particle loses dm = min(m_dot dt, m); the gas cell loses nu M_O2/M_C dm of O2 (deposited
+  into `o2_sink` with the cloud-in-cell weights, taken at the next gas step); the particle gets
+  dm h_c (h_c the heat per kg C of tidem.reactions). `shrink` keeps the density (d ~ m^1/3),
+  `density` keeps the diameter. A particle whose carbon is gone is removed.
+Polymerization (source 1, Kaneko et al. 1999): q = k_p p_M exp(-E/R (1/T - 1/T_ref)) m dH_p [W],
+  first order in the monomer partial pressure p_M.
+Sublimation (source 2 eq. 6): a particle at T_s turns the heat it receives into vapour,
+  dm = q dt / L_u (equivalently dR/dt = -q / (rho_s L_u 4 pi R^2)), with q its whole heat rate
+  (gas exchange with Nu = 2 in the Stokes regime, from `gas_coupling`); below T_s it warms, and
+  a step that crosses T_s puts the excess into vapour. The heat comes from the gas through the
+  implicit exchange of `gas_flow.energy` (two-way: a loaded plasma cools). A particle past
+  `exit` (z) leaves the domain unsublimated.
+
+Energy bookkeeping (what makes the balances close to rounding): the kick advances
+T += dt q / (m c) with the new mass, so reaction heat lands exactly in the particle; the
+sensible heat c T dm of the mass that reacted is counted in rsum[ENTHALPY_OUT]; a removed
+particle hands the heat of its last step, and the gas exchange the gas already charged for the
+rest of the gas step (`steps_left` DEM steps), back to its gas cells (`Qs`, added at the next
+gas step). Per-step stability (share of the mass used in one step) is refused at set-up
+(tidem.reactions); the last step of a particle's life is clamped to what it has left.
+"""
+
+import math
+
+import taichi as ti
+
+from .gas_grid import make_cic
+
+CHAR, POLY, SUBL = 0, 1, 2
+REACTED, O2_USED, HEAT_RELEASED, LATENT, ENTHALPY_OUT, REFUND, GONE, ESCAPED, MASS_ESCAPED = range(9)
+
+
+def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float = 1.0, mu: float = 1.0,
+                         W: int = 1):
+    """Return `react(n, t, dt, steps_left)` for the reactions of `tidem.reactions.reaction_constants`."""
+    gas = G is not None
+    timing = any(r["kind"] == SUBL for r in reactions)
+    if gas:
+        cic, corner, weight = make_cic(gg)
+
+    @ti.func
+    def deposit(F: ti.template(), x, amount):
+        if ti.static(gas):
+            base, frac = cic(x, -1)
+            for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                ti.atomic_add(F[corner(base, o, -1)], weight(frac, o) * amount)
+
+    @ti.func
+    def set_mass(i, m_new, shrink: ti.template()):
+        """New mass (and radius when shrinking at constant density); inverse mass, inertia and
+        heat capacity follow."""
+        m = S.mass[i]
+        if ti.static(shrink):
+            S.radius[i] *= (m_new / m) ** (1.0 / 3.0)
+        S.inv_heat_cap[i] *= m / m_new
+        S.mass[i] = m_new
+        if S.inv_mass[i] > 0.0:
+            S.inv_mass[i] = 1.0 / m_new
+            S.inv_inertia[i] = 1.0 / (0.4 * m_new * S.radius[i] ** 2)
+
+    @ti.func
+    def remove(i, t, dt, steps_left, heat_left):
+        """Take particle i out; `heat_left` [J] of this step and the gas exchange already
+        charged to the gas for the rest of the gas step go back to the gas."""
+        refund = heat_left
+        if ti.static(gas):
+            refund += S.gH[i] * (S.gT[i] - S.T[i]) * dt * steps_left
+            deposit(G.Qs, S.x[i], refund)
+        S.rsum[REFUND] += refund
+        S.active[i] = 0
+        S.v[i] = ti.Vector([0.0, 0.0, 0.0])
+        S.w[i] = ti.Vector([0.0, 0.0, 0.0])
+        S.q[i] = 0.0
+        for q in range(W):
+            S.wid[i, q] = -1
+        S.wmask[i] = 0
+        if ti.static(timing):
+            S.rt1[i] = t
+
+    def make_char(rc):
+        shrink = rc["shrink"]
+
+        @ti.func
+        def char(i, t, dt, steps_left, T, m, c):
+            gone = 0
+            d = 2.0 * S.radius[i]
+            p_o2 = ti.max(S.gY[i], 0.0) * rc["x_per_y"] * rc["pressure"]
+            k_s = rc["A"] * ti.exp(-rc["E_R"] / T)
+            w = (S.gu[i] - S.v[i]).norm()
+            sh = 2.0 + 0.6 * ti.sqrt(rho_g * w * d / mu) * rc["sc"] ** (1.0 / 3.0)
+            k_d = rc["film"] * sh * rc["D"] / (d * 0.5 * (T + S.gT[i]))
+            rate = math.pi * d * d * p_o2 / (1.0 / k_s + 1.0 / k_d)
+            dm = ti.min(rate * dt, m)
+            if dm > 0.0:
+                o2 = dm * rc["o2_per_c"]
+                deposit(G.o2_sink, S.x[i], o2)
+                S.rsum[REACTED] += dm
+                S.rsum[O2_USED] += o2
+                S.rsum[HEAT_RELEASED] += dm * rc["heat_per_c"]
+                S.rsum[ENTHALPY_OUT] += c * T * dm
+                heat = S.q[i] + dm * rc["heat_per_c"] / dt
+                if dm >= m:
+                    S.rsum[GONE] += 1.0
+                    remove(i, t, dt, steps_left, heat * dt)
+                    gone = 1
+                else:
+                    S.q[i] = heat
+                    set_mass(i, m - dm, shrink)
+            return gone
+
+        return char
+
+    def make_poly(rc):
+        @ti.func
+        def poly(i, t, dt, steps_left, T, m, c):
+            q = rc["k"] * ti.exp(-rc["E_R"] * (1.0 / T - 1.0 / rc["T_ref"])) * m * rc["enthalpy"]
+            S.q[i] += q
+            S.rsum[HEAT_RELEASED] += q * dt
+            return 0
+
+        return poly
+
+    def make_subl(rc):
+        @ti.func
+        def subl(i, t, dt, steps_left, T, m, c):
+            gone = 0
+            if S.x[i][2] > rc["exit"]:
+                S.rsum[ESCAPED] += 1.0
+                S.rsum[MASS_ESCAPED] += m
+                S.rsum[ENTHALPY_OUT] += c * T * m
+                remove(i, -t, dt, steps_left, S.q[i] * dt)
+                gone = 1
+            else:
+                T_s = rc["T_s"]
+                excess = (T + dt * S.q[i] / (m * c) - T_s) * m * c  # heat beyond T_s [J]
+                if excess > 0.0:
+                    dm = ti.min(excess / rc["L"], m)
+                    S.rsum[REACTED] += dm
+                    S.rsum[LATENT] += dm * rc["L"]
+                    S.rsum[ENTHALPY_OUT] += c * T_s * dm
+                    if dm >= m:
+                        S.rsum[GONE] += 1.0
+                        remove(i, t, dt, steps_left, S.q[i] * dt - dm * rc["L"] - c * (T_s - T) * m)
+                        gone = 1
+                    else:
+                        set_mass(i, m - dm, True)
+                        S.q[i] = (T_s - T) * (m - dm) * c / dt
+            return gone
+
+        return subl
+
+    makers = {CHAR: make_char, POLY: make_poly, SUBL: make_subl}
+    steps = [makers[rc["kind"]](rc) for rc in reactions]
+
+    @ti.kernel
+    def react(n: ti.i32, t: ti.f64, dt: ti.f64, steps_left: ti.i32) -> ti.i32:
+        """Advance every reacting particle by dt; returns the number of particles removed."""
+        removed = 0
+        for i in range(n):
+            if S.active[i] and S.rx[i] >= 0:
+                if ti.static(timing):
+                    if S.rt0[i] < 0.0:
+                        S.rt0[i] = t
+                T = S.T[i]
+                m = S.mass[i]
+                c = 1.0 / (S.inv_heat_cap[i] * m)  # specific heat [J/(kg K)]
+                for k in ti.static(range(len(steps))):
+                    if S.rx[i] == k:
+                        removed += steps[k](i, t, dt, steps_left, T, m, c)
+        return removed
+
+    return react
