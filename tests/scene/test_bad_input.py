@@ -79,7 +79,7 @@ def run_check(path, *extra):
         (lambda r: r["particles"][0].update(material="steel"),
          "particles[0].material: no material named 'steel'; defined: sus304"),
         (lambda r: r["contact"].update(model="hooke"),
-         "contact.model: input should be 'hertz_mindlin', 'linear' or 'hysteretic' (got 'hooke')"),
+         "contact.model: input should be 'hertz_mindlin', 'linear', 'hysteretic' or 'none' (got 'hooke')"),
         (lambda r: r["numerics"].update(dt=1e-4),
          "numerics.dt: 0.0001 s is above the stability limit"),
         (lambda r: r["particles"][0]["positions"].__setitem__(0, [0.5, 0.0, 0.0]),
