@@ -70,7 +70,8 @@ def test_single_impact_run_writes_restitution_of_the_material(tmp_path):
     run = json.loads((out / "run.json").read_text())
     found = obs.flatten(run["observables"])
     assert set(run["observables"]) == {"contact_time", "impact_heat", "restitution", "kinetic_energy"}
-    assert run["impact_heat"][0]["heat_gained_J"] < 0 < run["impact_heat"][1]["heat_gained_J"]
+    gains = [row["heat_gained_J"] for row in run["impact_heat"]]
+    assert min(gains) < 0 < max(gains), "hot spheres lose what cold ones gain"
     assert found["restitution"] == pytest.approx(0.5, rel=0.01)
     speeds = np.array([0.845, 1.01, 1.125])  # each sphere's initial speed (half the impact speed)
     ke0 = 2 * 0.5 * 2.82e-2 * np.sum(speeds ** 2)
