@@ -31,6 +31,17 @@ def cluster(d, youngs, restitution, friction, **extra):
     return raw
 
 
+def sand_slab(**tables):
+    """A 12 mm x 4 mm slab of 1 mm sand, 12 mm deep, periodic in y, for the gas extremes."""
+    return make_scene(
+        domain={"min": [0, 0, 0], "max": [0.012, 0.004, 0.04], "periodic": ["y"], "walls": "auto",
+                "gravity": [0, 0, -9.81]},
+        materials={"sand": {"density": 2500.0, "youngs_modulus": 1e7, "restitution": 0.5, "friction": 0.3}},
+        particles=[{"name": "bed", "material": "sand", "diameter": {"value": 0.001},
+                    "region": {"min": [0, 0, 0], "max": [0.012, 0.004, 0.012]}}],
+        **tables)
+
+
 def total_energy(s):
     e = s.energies()
     return e["kinetic_energy_J"] + e["rotational_energy_J"] + e["potential_energy_J"]
@@ -104,13 +115,7 @@ def test_thermal_limit_refuses_then_names_a_stable_setting():
 
 @pytest.mark.parametrize("rho_gas", [0.02, 20.0])
 def test_gas_density_extremes(solver_for, rho_gas):
-    raw = make_scene(
-        domain={"min": [0, 0, 0], "max": [0.012, 0.004, 0.04], "periodic": ["y"], "walls": "auto",
-                "gravity": [0, 0, -9.81]},
-        materials={"sand": {"density": 2500.0, "youngs_modulus": 1e7, "restitution": 0.5, "friction": 0.3}},
-        particles=[{"name": "bed", "material": "sand", "diameter": {"value": 0.001},
-                    "region": {"min": [0, 0, 0], "max": [0.012, 0.004, 0.012]}}],
-        gas={"cell_size": 0.004, "density": rho_gas, "inlet_velocity": 0.6, "coupling_interval": 10},
+    raw = sand_slab(gas={"cell_size": 0.004, "density": rho_gas, "inlet_velocity": 0.6, "coupling_interval": 10},
         numerics={"max_overlap": 0.1},
     )
     s = solver_for(raw)
@@ -157,13 +162,7 @@ def test_float64_runs_are_bit_identical():
 def test_float64_gas_runs_are_bit_identical():
     """Fluidized particles and gas: the deposits onto the gas grid are summed in particle
     order, so two runs agree to the bit on any thread count."""
-    raw = make_scene(
-        domain={"min": [0, 0, 0], "max": [0.012, 0.004, 0.04], "periodic": ["y"], "walls": "auto",
-                "gravity": [0, 0, -9.81]},
-        materials={"sand": {"density": 2500.0, "youngs_modulus": 1e7, "restitution": 0.5, "friction": 0.3}},
-        particles=[{"name": "bed", "material": "sand", "diameter": {"value": 0.001},
-                    "region": {"min": [0, 0, 0], "max": [0.012, 0.004, 0.012]}}],
-        gas={"cell_size": 0.004, "inlet_velocity": 0.9, "coupling_interval": 5},
+    raw = sand_slab(gas={"cell_size": 0.004, "inlet_velocity": 0.9, "coupling_interval": 5},
         numerics={"max_overlap": 0.1},
     )
     finals = []
