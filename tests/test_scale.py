@@ -15,13 +15,14 @@ from tidem.scene.errors import SceneError
 from tidem.scene.load import load, validate
 
 PEAK = """
-import resource, sys
+import sys
 from tidem.cli import app
+from tidem.model import peak_resident_bytes
 try:
     app(sys.argv[1:], standalone_mode=False)
 except SystemExit:
     pass
-print("PEAK_BYTES", resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
+print("PEAK_BYTES", peak_resident_bytes())
 """
 
 

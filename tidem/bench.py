@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.model import spatial_key
+from tidem.model import peak_resident_bytes, spatial_key
 
 BED = Path(__file__).resolve().parent.parent / "benchmarks" / "bed10k.npz"
 TILES = {10000: (1, 1), 50000: (5, 1), 200000: (5, 4), 1000000: (10, 10)}
@@ -70,8 +70,6 @@ def bench_scene(x: np.ndarray, extent, precision: str) -> dict:
 
 def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None = None) -> dict:
     """Time one case in this process (called in a child process by `run_matrix`)."""
-    import resource
-
     from tidem.runtime import ensure_taichi
 
     ensure_taichi("cpu", precision, threads)
@@ -92,7 +90,7 @@ def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None =
         solver.step()
     ti.sync()
     wall = time.perf_counter() - t0
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    rss = peak_resident_bytes()
     e = solver.energies()
     return {"particles": len(x), "precision": precision, "threads": threads, "steps": steps, "loop_s": wall,
             "particle_steps_per_s": len(x) * steps / wall, "rebuilds": solver.rebuilds,

@@ -164,6 +164,22 @@ def available_memory_bytes() -> int | None:
     return None
 
 
+def peak_resident_bytes() -> int:
+    """This process's peak resident memory [bytes]: VmHWM of /proc/self/status where it exists.
+
+    getrusage's ru_maxrss is not used on Linux: it survives execve, so a process started from a
+    large parent (a long pytest session) reports the parent's size, not its own."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
 def memory_refusal(model: "Model") -> list[str]:
     """A message when the run would need more memory than the machine has available."""
     need, have = model.peak_memory_bytes(), available_memory_bytes()
