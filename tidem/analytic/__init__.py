@@ -1,0 +1,1 @@
+"""Closed-form and reference solutions that tidem's runs are compared with."""
