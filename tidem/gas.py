@@ -4,8 +4,8 @@
 `kernels/gas_coupling.py` for the exchange with particles) and advances the gas by one step
 of `coupling_interval` DEM steps: deposit voidage and drag, predict, project (CG), correct,
 gas energy, then sample the new gas state at the particles. Stability limits it cannot
-meet (gas Courant number, a drag relaxation time shorter than the DEM step) raise
-`GasError` with the setting to change.
+meet (gas Courant number, a drag relaxation time or a gas-particle heat-exchange time
+m c / H_p shorter than the DEM step) raise `GasError` with the setting to change.
 """
 
 from __future__ import annotations
@@ -128,6 +128,8 @@ class GasPhase:
         fb.dense(ti.ij, gg.cells[:2]).place(G.inlet)
         G.sums = ti.field(fp)
         fb.dense(ti.i, 2).place(G.sums)
+        G.heat_rate = ti.field(fp)  # max over particles of H_p / (m_p c_p) [1/s], set by `couple`
+        fb.dense(ti.i, 1).place(G.heat_rate)
         self._tree = fb.finalize()
         self.G = G
         G.solid.from_numpy(self.solid)
@@ -136,15 +138,15 @@ class GasPhase:
         G.eps.fill(1.0)
         G.eps_old.fill(1.0)
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
+        self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
                                       gas.density * gas.heat_capacity)
         self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
-            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas)
+            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.t_in)
         if self.heat:
             T0 = gas.initial_temperature or scene.heat.initial_temperature
             G.T.fill(T0)
-            self.t_in = gas.inlet_temperature or scene.heat.initial_temperature
         self.n = model.capacity
         self.iterations = 0
         self.residual = 0.0
@@ -175,14 +177,22 @@ class GasPhase:
             raise GasError(
                 f"the drag relaxation time of the lightest particle ({1.0 / rate:.3g} s) is shorter than the DEM step "
                 f"({dt / self.interval:.3g} s): lower numerics.dt (or dt_fraction), or use larger particles")
+        if self.heat:
+            heat_rate = float(self.G.heat_rate[0])
+            if heat_rate * dt / self.interval > 1.0:
+                raise GasError(
+                    f"the gas-particle heat-exchange time m c / (h pi d^2) of the fastest particle ({1.0 / heat_rate:.3g} s) "
+                    f"is shorter than the DEM step ({dt / self.interval:.3g} s), so the explicit particle temperature "
+                    "update would overshoot: lower numerics.dt (or dt_fraction), or raise the particles' heat capacity")
         f["predict"](dt)
         self._project(dt)
         f["correct"]()
         courant = f["courant"](dt)
         if courant > MAX_COURANT:
+            fix = (f"lower gas.coupling_interval (now {self.interval})" if self.interval > 1
+                   else "lower numerics.dt (or dt_fraction)")
             raise GasError(
-                f"gas Courant number {courant:.2f} exceeds {MAX_COURANT} at t = {t:.6g} s (gas step {dt:.3g} s): "
-                f"lower gas.coupling_interval (now {self.interval})")
+                f"gas Courant number {courant:.2f} exceeds {MAX_COURANT} at t = {t:.6g} s (gas step {dt:.3g} s): {fix}")
         if self.heat:
             f["energy"](dt, self.t_in)
         self.divergence = f["divergence"](dt)
