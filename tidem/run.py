@@ -14,6 +14,7 @@ from typing import Callable
 import numpy as np
 
 from tidem import __version__
+from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
@@ -85,6 +86,13 @@ class Output:
             lines = ["tube,angle_deg,alpha_W_m2K"] + [f"{r['tube']},{r['angle_deg']:.2f},{r['alpha_W_m2K']:.6g}" for r in rows]
             (self.dir / "alpha_profile.csv").write_text("\n".join(lines) + "\n")
 
+    def write_bed_profiles(self, solver: Solver, recorder: ProfileRecorder) -> dict:
+        """preheat_profiles.csv (see `tidem.bed_profiles`); returns the summary for run.json."""
+        rows, result = profile_rows(self.model, solver, recorder)
+        if rows:
+            write_csv(self.dir / CSV_NAME, rows)
+        return result
+
     def write_summary(self, data: dict) -> None:
         path = self.dir / "run.json"
         tmp = path.with_suffix(".json.tmp")
@@ -142,7 +150,13 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     out = Output(out_dir, model)
     out.write_summary(summary(model, None, "starting", 0.0))
     t_setup = time.perf_counter()
-    solver = solver or Solver(model)
+    try:
+        solver = solver or Solver(model)
+    except RunError as exc:  # a limit already broken at t = 0 (e.g. the gas Courant number)
+        out.series.close()
+        data = summary(model, None, "failed", 0.0, str(exc))
+        out.write_summary(data)
+        return RunResult(status="failed", out_dir=Path(out_dir), steps=0, wall_s=0.0, message=str(exc), summary=data)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     scene = model.scene
@@ -151,6 +165,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     series_dt = scene.output.timeseries_interval or snap_dt / 10.0
     next_snap = 0.0
     next_series = 0.0
+    profiles = ProfileRecorder(model) if model.features.packed_bed_profiles else None
     total_steps = max(1, math.ceil(t_end / model.dt - 1e-9))
     status, message = "finished", ""
     from tidem.progress import RunProgress
@@ -167,6 +182,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     next_snap += snap_dt
                     if on_snapshot is not None:
                         on_snapshot(written)
+                if profiles is not None and profiles.due(solver.t):
+                    profiles.record(solver)
                 if view is not None:
                     view.update(solver)
                 if solver.steps >= total_steps:
@@ -186,5 +203,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         wall = time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
         data = summary(model, solver, status, wall, message)
         data["setup_s"] = setup_s
+        if profiles is not None:
+            data.setdefault("observables", {})["packed_bed_profiles"] = out.write_bed_profiles(solver, profiles)
         out.write_summary(data)
     return RunResult(status=status, out_dir=Path(out_dir), steps=solver.steps, wall_s=wall, message=message, summary=data)

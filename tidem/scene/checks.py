@@ -74,6 +74,28 @@ def gas_checks(scene: Scene) -> list[str]:
     return errs
 
 
+def profile_checks(scene: Scene) -> list[str]:
+    """The packed-bed profiles compare with Schumann's model: a fixed bed at one starting
+    temperature, heated by a uniform gas stream switched on at t = 0."""
+    out = scene.output
+    if "packed_bed_profiles" not in scene.observables:
+        return [f"output.{key}: used only by the 'packed_bed_profiles' observable; add it to observables "
+                "or remove the key" for key in ("profile_times", "profile_bins") if getattr(out, key) is not None]
+    key = "observables: 'packed_bed_profiles'"
+    errs: list[str] = []
+    if scene.heat is None or scene.gas is None:
+        return [f"{key} needs a [heat] and a [gas] table (a bed heated by the gas)"]
+    moving = [g.name for g in scene.particles if not g.fixed]
+    if moving:
+        errs.append(f"{key} needs a fixed bed; set fixed = true in the particle groups {', '.join(moving)}")
+    starts = {g.temperature or scene.heat.initial_temperature for g in scene.particles}
+    if len(starts) > 1:
+        errs.append(f"{key} needs every particle to start at one temperature (got {sorted(starts)} K)")
+    if scene.gas.nozzles or scene.gas.inlet_ramp > 0:
+        errs.append(f"{key} needs a uniform gas inlet switched on at once; remove gas.nozzles and gas.inlet_ramp")
+    return errs
+
+
 def cross_checks(scene: Scene) -> list[str]:
     """All problems that a single table cannot see, as 'key.path: message' lines."""
     errs: list[str] = []
@@ -156,6 +178,7 @@ def cross_checks(scene: Scene) -> list[str]:
 
     errs += heat_checks(scene)
     errs += gas_checks(scene)
+    errs += profile_checks(scene)
 
     dmax = max_diameter(scene)
     cell = dmax * (1.0 + scene.numerics.skin)

@@ -217,6 +217,8 @@ class Output(Strict):
     snapshots: int = Field(default=50, ge=1)
     timeseries_interval: Positive | None = None
     smoke_steps: int = Field(default=300, ge=1)
+    profile_times: list[Positive] | None = None
+    profile_bins: int | None = Field(default=None, ge=1)
 
 
 class Heat(Strict):
@@ -303,4 +305,4 @@ class Scene(Strict):
     render: Render = Render()
     heat: Heat | None = None
     gas: Gas | None = None
-    observables: list[Literal["contact_time"]] = []
+    observables: list[Literal["contact_time", "packed_bed_profiles"]] = []
