@@ -102,7 +102,8 @@ def test_check_prints_derived_numbers():
         assert word in result.output
 
 
-@pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml", "fluidized_tube.toml"])
+@pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml", "fluidized_tube.toml",
+                                  "packed_bed_preheat.toml"])
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name
