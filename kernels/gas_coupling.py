@@ -5,12 +5,19 @@ At each gas step (every `coupling_interval` DEM steps):
                   clipped below at `min_voidage`.
   couple:         per particle, eps_p and u_p interpolated with the same weights; the drag
                   coefficient K_p (`drag.make_drag`) and heat conductance H_p = h_p pi d^2
-                  (`drag.make_nusselt`) are frozen until the next gas step; K_p w_pf is added
+                  (`drag.make_nusselt`) are frozen until the next gas step (the largest
+                  H_p / (m_p c_p) of a non-reacting particle is kept in G.heat_rate for the
+                  step limit); K_p w_pf is added
                   to face f's implicit drag coefficient B_f and K_p w_pf v_p to Bv_f, and with
                   heat H_p w_pc to the cell's H_c and H_p w_pc T_p to HT_c.
   sample:         after the gas step, u_p, grad p_p and T_g,p (and Y_O2,p) at each particle.
 Every DEM step (`add_gas_forces`): f_p += K_p (u_p - v_p) - V_p grad p_p (source 1, Tsuji
 form, the gas carrying -eps grad p), and q_p += H_p (T_g,p - T_p).
+Below the first cell centre, where gas enters through the distributor, the gas temperature
+is interpolated between the inlet face (T_in) and the bottom cell: the lattice point below
+the bottom cell c takes the mirror value 2 T_in - T_c (a convex combination for any particle
+above the distributor, so no overshoot). That share of the exchange, w H_p (T_p - 2 T_in + T_c),
+is charged to the bottom cell (T_c implicit), so the heat exchanged still balances exactly.
 Because interpolation and deposition share weights that sum to 1, the drag the gas feels,
 sum_f B_f u_f - Bv_f, equals minus the sum of the particle drag forces at the gas step
 (momentum exchange balances exactly), and likewise for heat.
@@ -26,12 +33,13 @@ from .gas_grid import make_cic
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
-                          species: bool = False, tracer_dt: float = 0.0):
+                          species: bool = False, tracer_dt: float = 0.0, t_in: float = 0.0):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n)) for particles S and gas G;
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
     `tracer_dt` (the DEM step, scenes with reactions) a reacting particle's drag coefficient is
     capped at m / (2 dt): one that shrank below the drag relaxation limit follows the gas
-    (tracer limit) instead of making the explicit drag update unstable."""
+    (tracer limit) instead of making the explicit drag update unstable. `t_in` is the inlet gas
+    temperature, used below the first cell centre."""
     cic, corner, weight = make_cic(gg)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
@@ -56,6 +64,24 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         out = 0.0
         for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
             out += weight(frac, o) * F[corner(base, o, -1)]
+        return out
+
+    @ti.func
+    def below_inlet(base, o, J):
+        """Corner o lies below the bottom cell, where gas enters (inlet velocity > 0)."""
+        return base[2] + o[2] < 0 and G.inlet[J[0], J[1]] > 0.0
+
+    @ti.func
+    def sample_temperature(x):
+        """T_g at x, with the mirror value 2 T_in - T_c below the bottom cell over the inlet."""
+        base, frac = cic(x, -1)
+        out = 0.0
+        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+            J = corner(base, o, -1)
+            t = G.T[J]
+            if below_inlet(base, o, J):
+                t = 2.0 * t_in - G.T[J]
+            out += weight(frac, o) * t
         return out
 
     @ti.func
@@ -86,6 +112,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 B[c][I] = 0.0
                 BV[c][I] = 0.0
         if ti.static(heat):
+            G.heat_rate[0] = 0.0
             for I in ti.grouped(G.H):
                 G.H[I] = 0.0
                 G.HT[I] = 0.0
@@ -116,12 +143,21 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                     h = nusselt(eps, d, w) * k_gas / d
                     hp = h * math.pi * d * d
                     S.gH[i] = hp
+                    heat_rate = hp * S.inv_heat_cap[i]
+                    if ti.static(tracer_dt > 0.0):
+                        if S.rx[i] >= 0:  # reacting: shrinks to nothing; kernels/reactions.py bounds its T
+                            heat_rate = 0.0
+                    ti.atomic_max(G.heat_rate[0], heat_rate)
                     base, frac = cic(x, -1)
                     for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
                         J = corner(base, o, -1)
                         wh = weight(frac, o) * hp
-                        G.H[J] += wh
-                        G.HT[J] += wh * S.T[i]
+                        if below_inlet(base, o, J):
+                            G.H[J] -= wh
+                            G.HT[J] += wh * (S.T[i] - 2.0 * t_in)
+                        else:
+                            G.H[J] += wh
+                            G.HT[J] += wh * S.T[i]
         return rate
 
     @ti.kernel
@@ -132,7 +168,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 S.gu[i] = sample_faces(U, x)
                 S.ggp[i] = sample_faces(GP, x)
                 if ti.static(heat):
-                    S.gT[i] = sample_cells(G.T, x)
+                    S.gT[i] = sample_temperature(x)
                 if ti.static(species):
                     S.gY[i] = sample_cells(G.Y, x)
 

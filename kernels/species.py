@@ -30,7 +30,7 @@ def make_species_kernel(gg, G, flow: dict, rho: float, diffusivity: float):
         for I in ti.grouped(G.Y):
             G.Y_new[I] = G.Y[I]
             if G.solid[I] == 0:
-                net, boundary = upwind(G.Y, I, y_in)
+                net, boundary = upwind(G.Y, I, y_in, False)
                 diff = 0.0
                 for c in ti.static(range(3)):
                     e = ti.Vector([0, 0, 0])

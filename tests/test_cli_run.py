@@ -104,7 +104,7 @@ def test_check_prints_derived_numbers():
 
 @pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml", "moving_bed_ta1.toml",
                                   "moving_bed_ta2.toml", "fluidized_tube.toml", "char_combustion.toml",
-                                  "olefin_polymerization.toml", "plasma_sublimation.toml"])
+                                  "olefin_polymerization.toml", "plasma_sublimation.toml", "packed_bed_preheat.toml"])
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name

@@ -4,8 +4,8 @@
 `kernels/gas_coupling.py` for the exchange with particles) and advances the gas by one step
 of `coupling_interval` DEM steps: deposit voidage and drag, predict, project (CG), correct,
 gas energy, then sample the new gas state at the particles. Stability limits it cannot
-meet (gas Courant number, a drag relaxation time shorter than the DEM step) raise
-`GasError` with the setting to change.
+meet (gas Courant number, a drag relaxation time or a gas-particle heat-exchange time
+m c / H_p shorter than the DEM step) raise `GasError` with the setting to change.
 """
 
 from __future__ import annotations
@@ -143,8 +143,22 @@ def drag_rate_bound(gas, d: float, rho_p: float) -> float:
     return 2.0 * max(wen_yu, ergun)
 
 
-def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray) -> list[str]:
-    """Refusals before the first step: drag relaxation, gas Courant and diffusion numbers."""
+def fixed_bed_voidage(gg: GasGrid, x: np.ndarray, radius: np.ndarray) -> float:
+    """Smallest voidage of a gas cell holding a fixed bed: particle volumes binned to the cell
+    of their centre (the bed never moves, so this is the voidage the gas always sees)."""
+    idx = np.floor((x - np.asarray(gg.lo)) / np.asarray(gg.h)).astype(int)
+    idx = np.clip(idx, 0, np.asarray(gg.cells) - 1)
+    solid = np.zeros(gg.cells)
+    np.add.at(solid, tuple(idx.T), 4.0 / 3.0 * np.pi * radius**3)
+    return float(1.0 - solid.max() / (gg.h[0] * gg.h[1] * gg.h[2]))
+
+
+def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray,
+                    fixed_x: np.ndarray | None = None) -> list[str]:
+    """Refusals before the first step: drag relaxation, gas Courant and diffusion numbers.
+    The Courant number takes the interstitial inlet velocity at `gas.min_voidage` (a moving
+    bed may pack that far), or for a bed whose particles are all fixed (at `fixed_x`) at its
+    densest cell's voidage."""
     gas = scene.gas
     gg = gas_grid(scene)
     errs = []
@@ -155,7 +169,8 @@ def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray) -
                     f"shorter than the time step {dt:.3g} s; use numerics.dt <= {1 / rate:.3g} (or a smaller "
                     "dt_fraction), or larger particles")
     dt_gas = gas.coupling_interval * dt
-    u = max([gas.inlet_velocity] + [nz.velocity for nz in gas.nozzles]) / gas.min_voidage
+    voidage = gas.min_voidage if fixed_x is None else max(gas.min_voidage, fixed_bed_voidage(gg, fixed_x, radius))
+    u = max([gas.inlet_velocity] + [nz.velocity for nz in gas.nozzles]) / voidage
     courant = u * dt_gas / min(gg.h)
     if courant > MAX_COURANT:
         stable = max(1, int(MAX_COURANT * min(gg.h) / (u * dt)))
@@ -211,6 +226,8 @@ class GasPhase:
         fb.dense(ti.ij, gg.cells[:2]).place(G.inlet)
         G.sums = ti.field(fp)
         fb.dense(ti.i, 2).place(G.sums)
+        G.heat_rate = ti.field(fp)  # max over particles of H_p / (m_p c_p) [1/s], set by `couple`
+        fb.dense(ti.i, 1).place(G.heat_rate)
         walls = tube_walls(gg, model.tubes) if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
         if walls is not None:
@@ -236,13 +253,14 @@ class GasPhase:
         G.eps.fill(1.0)
         G.eps_old.fill(1.0)
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
+        self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources)
         self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
-            model.dt if self.sources else 0.0)
+            model.dt if self.sources else 0.0, self.t_in)
         if self.species:
             from tidem.reactions import o2_mass_fraction
 
@@ -254,7 +272,6 @@ class GasPhase:
         if self.heat:
             T0 = gas.initial_temperature or scene.heat.initial_temperature
             G.T.fill(T0)
-            self.t_in = gas.inlet_temperature or scene.heat.initial_temperature
         self.n = model.capacity
         self.iterations = 0
         self.residual = 0.0
@@ -285,14 +302,22 @@ class GasPhase:
             raise GasError(
                 f"the drag relaxation time of the lightest particle ({1.0 / rate:.3g} s) is shorter than the DEM step "
                 f"({dt / self.interval:.3g} s): lower numerics.dt (or dt_fraction), or use larger particles")
+        if self.heat:
+            heat_rate = float(self.G.heat_rate[0])
+            if heat_rate * dt / self.interval > 1.0:
+                raise GasError(
+                    f"the gas-particle heat-exchange time m c / (h pi d^2) of the fastest particle ({1.0 / heat_rate:.3g} s) "
+                    f"is shorter than the DEM step ({dt / self.interval:.3g} s), so the explicit particle temperature "
+                    "update would overshoot: lower numerics.dt (or dt_fraction), or raise the particles' heat capacity")
         f["predict"](dt)
         self._project(dt)
         f["correct"]()
         courant = f["courant"](dt)
         if courant > MAX_COURANT:
+            fix = (f"lower gas.coupling_interval (now {self.interval})" if self.interval > 1
+                   else "lower numerics.dt (or dt_fraction)")
             raise GasError(
-                f"gas Courant number {courant:.2f} exceeds {MAX_COURANT} at t = {t:.6g} s (gas step {dt:.3g} s): "
-                f"lower gas.coupling_interval (now {self.interval})")
+                f"gas Courant number {courant:.2f} exceeds {MAX_COURANT} at t = {t:.6g} s (gas step {dt:.3g} s): {fix}")
         if self.heat:
             f["energy"](dt, self.t_in)
         if self.species:

@@ -39,6 +39,7 @@ class Features:
     gas: bool = False
     reactions: tuple[str, ...] = ()  # reaction types, in scene order
     species: bool = False  # O2 transported on the gas grid (char combustion)
+    packed_bed_profiles: bool = False
 
     @property
     def contacts(self) -> bool:
@@ -61,6 +62,8 @@ class Features:
             out.append("outlet recycle")
         if self.contact_time:
             out.append("contact-time observer")
+        if self.packed_bed_profiles:
+            out.append("packed-bed temperature profiles (against Schumann)")
         if self.heat:
             out.append("heat (contact-spot conduction, gas-lens conduction between neighbours, "
                        "wall/tube conduction after Schluender)" if self.contacts
@@ -478,20 +481,23 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
             scales = ts
     num = scene.numerics
     contacts = law != "none"
-    soft = contacts and _too_soft(scene, law, mats, mat_names, material, radius, np.concatenate(x0),
+    # every particle fixed: nothing moves, so no contact can become unstable and the contact
+    # limits do not bind the step; the heat limit (below) and the gas limits (at run time) still do
+    all_fixed = bool(fixed.all())
+    soft = contacts and not all_fixed and _too_soft(scene, law, mats, mat_names, material, radius, np.concatenate(x0),
                                   np.concatenate(active0), speed)
     if soft:
         raise SceneError(src, soft)
     if num.dt is not None:
         dt = num.dt
-        if dt > scales.limit and not num.force_dt and contacts:
+        if dt > scales.limit and not num.force_dt and contacts and not all_fixed:
             raise SceneError(src, [
                 f"numerics.dt: {dt:g} s is above the stability limit {scales.limit:.3g} s of the stiffest contact "
                 f"(Rayleigh time {scales.rayleigh:.3g} s, contact time {scales.contact:.3g} s); use dt <= {scales.limit:.3g}, "
                 "leave dt out to get dt_fraction * min(Rayleigh, contact time), or set numerics.force_dt = true"])
     else:
         dt = num.dt_fraction * scales.reference
-        if dt > scales.limit and not num.force_dt:
+        if dt > scales.limit and not num.force_dt and not all_fixed:
             raise SceneError(src, [
                 f"numerics.dt_fraction: {num.dt_fraction} gives dt = {dt:.3g} s, above the stability limit "
                 f"{scales.limit:.3g} s; use dt_fraction <= {scales.limit / scales.reference:.2f} or set numerics.force_dt = true"])
@@ -524,6 +530,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         gas=scene.gas is not None,
         reactions=tuple(r.type for r in scene.reactions),
         species=any(r.type == "char_combustion" for r in scene.reactions),
+        packed_bed_profiles="packed_bed_profiles" in scene.observables,
     )
     heat_cap = temperature0 = thermal_limit = None
     if scene.heat is not None:
@@ -542,7 +549,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     if scene.gas is not None:
         from tidem.gas import gas_step_checks
 
-        gas_errors = gas_step_checks(scene, dt, radius, density)
+        gas_errors = gas_step_checks(scene, dt, radius, density, np.concatenate(x0) if all_fixed else None)
         if gas_errors:
             raise SceneError(src, gas_errors)
     rx = rconst = None

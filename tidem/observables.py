@@ -61,10 +61,13 @@ class RunRecord:
     """Heat per impact per particle (`impact_heat_rows`), when the scene declares impact_heat."""
     packet_rows: list[dict] = field(default_factory=list)
     """Packet model per heated tube (`packet_model_rows`), for a moving-plate outlet."""
+    bed_profiles: dict | None = None
+    """Summary of the packed-bed profiles against Schumann (`tidem.bed_profiles.profile_rows`)."""
 
 
-def record(model, solver, series: dict[str, np.ndarray]) -> RunRecord:
-    """The RunRecord of a run at its end (after the time series is closed)."""
+def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None) -> RunRecord:
+    """The RunRecord of a run at its end (after the time series is closed); `bed_profiles` is
+    the packed-bed profile summary the run loop computed, if the scene declares it."""
     S = solver.state
     active = S.active.to_numpy().astype(bool)
     floor = model.scene.domain.min[2]
@@ -80,7 +83,7 @@ def record(model, solver, series: dict[str, np.ndarray]) -> RunRecord:
         alpha_means=means,
         contact_rows=contact_times(model, solver) if model.features.contact_time else [],
         impact_rows=impact_heat_rows(model, solver) if "impact_heat" in model.scene.observables else [],
-        packet_rows=packet_model_rows(model, means))
+        packet_rows=packet_model_rows(model, means), bed_profiles=bed_profiles)
 
 
 Compute = Callable[[RunRecord], dict[str, float]]
@@ -251,6 +254,23 @@ def packet_model(rec: RunRecord) -> dict[str, float]:
         out[f"tube{row['tube']}_packet_alpha_W_m2K"] = row["alpha_W_m2K"]
         out[f"tube{row['tube']}_over_packet"] = row["simulated_over_packet"]
     return out
+
+
+def _heat_and_gas(scene) -> str | None:
+    return None if scene.heat is not None and scene.gas is not None else \
+        "needs a [heat] and a [gas] table (a bed heated by the gas)"
+
+
+@observable("packed_bed_profiles", needs=_heat_and_gas)
+def packed_bed_profiles(rec: RunRecord) -> dict[str, float]:
+    """Axial solid-temperature profiles of a fixed bed heated by the gas against Schumann's
+    solution for the same bed (`tidem.bed_profiles`): the largest deviation of a bin mean
+    over all profile times [K] (`packed_bed_max_deviation_K`) and in % of T_in - T_0
+    (`packed_bed_max_deviation_pct`); `preheat_profiles.csv` and run.json's
+    `packed_bed_profiles` hold the profiles and the reference bed."""
+    p = rec.bed_profiles or {}
+    return {"packed_bed_max_deviation_K": p.get("max_deviation_K"),
+            "packed_bed_max_deviation_pct": p.get("max_deviation_pct")}
 
 
 # Measurements from the solver state that the observables above draw on.

@@ -17,6 +17,7 @@ import numpy as np
 
 from tidem import __version__, checkpoint
 from tidem import observables as obs
+from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.model import Model
@@ -59,6 +60,8 @@ class Output:
             (self.dir / "snapshots.pvd").unlink(missing_ok=True)
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
         self.reactions = ReactionLog(self.dir, model) if model.features.reactions else None
+        self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
+                         if model.features.packed_bed_profiles else None)
 
     def snapshot(self, solver: Solver) -> Path:
         """Write the next snapshot and list it in snapshots.pvd; returns its file."""
@@ -102,6 +105,16 @@ class Output:
         if rows:
             lines = ["tube,angle_deg,alpha_W_m2K"] + [f"{r['tube']},{r['angle_deg']:.2f},{r['alpha_W_m2K']:.6g}" for r in rows]
             (self.dir / "alpha_profile.csv").write_text("\n".join(lines) + "\n")
+
+    def write_bed_profiles(self, solver: Solver) -> dict | None:
+        """preheat_profiles.csv of the profiles recorded so far (`tidem.bed_profiles`); returns
+        their summary for run.json, or None without the packed_bed_profiles observable."""
+        if self.profiles is None:
+            return None
+        rows, result = profile_rows(self.model, solver, self.profiles)
+        if rows:
+            write_csv(self.dir / CSV_NAME, rows)
+        return result
 
     def write_summary(self, data: dict) -> None:
         path = self.dir / "run.json"
@@ -157,14 +170,16 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
     return out
 
 
-def observed(model: Model, solver: Solver, series_path: Path) -> dict:
-    """run.json's `observables` (the scene's declared ones, `tidem.observables`) and, with
-    contact_time, the per-particle `contact_times`."""
+def observed(model: Model, solver: Solver, series_path: Path, bed_profiles: dict | None = None) -> dict:
+    """run.json's `observables` (the scene's declared ones, `tidem.observables`) and the
+    per-particle or per-time tables behind some of them."""
     names = model.scene.observables
     if not names:
         return {}
-    rec = obs.record(model, solver, read_series(series_path))
+    rec = obs.record(model, solver, read_series(series_path), bed_profiles)
     out = {"observables": obs.compute(names, rec)}
+    if bed_profiles:
+        out["packed_bed_profiles"] = bed_profiles
     if rec.contact_rows:
         out["contact_times"] = rec.contact_rows
     if rec.impact_rows:
@@ -265,6 +280,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         state = {"snap_dt": snap_dt, "series_dt": series_dt, "next_snap": next_snap, "next_series": next_series,
                  "entries": out.entries, "series_rows": out.series.rows, "last_sample_t": last_sample_t,
                  "output": output_table, "wall_s": wall_before + time.perf_counter() - t0}
+        if out.profiles is not None:
+            state["profiles"] = out.profiles.state()
         checkpoint.save(out.dir, solver, state, model.loaded.raw)
 
     bar = RunProgress(enabled=progress, t_end=t_end, particles=int(model.active0.sum()) or model.capacity)
@@ -283,6 +300,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     next_snap += snap_dt
                     if on_snapshot is not None:
                         on_snapshot(written)
+                if out.profiles is not None and out.profiles.due(solver.t):
+                    out.profiles.record(solver)
                 if view is not None:
                     view.update(solver)
                 if solver.steps >= total_steps:
@@ -314,13 +333,14 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         out.series.close()
         if model.angle_bins:
             out.write_alpha_profile(solver)
+        bed_profiles = out.write_bed_profiles(solver)
         wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
         data = summary(model, solver, status, wall, message)
         data["setup_s"] = setup_s
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])
         if status == "finished":
-            data.update(observed(model, solver, out.series.path))
+            data.update(observed(model, solver, out.series.path, bed_profiles))
         if out.reactions is not None:  # per reaction group, and flat in observables for tradeoff/sweep
             figures = out.reactions.finish(solver)
             data["reactions"] = figures

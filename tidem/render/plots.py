@@ -88,4 +88,35 @@ def plot_timeseries(run_dir: Path) -> list[Path]:
         written.append(out_dir / "alpha_profile.png")
         fig.savefig(written[-1], dpi=110)
         plt.close(fig)
+    profiles = Path(run_dir) / "preheat_profiles.csv"
+    if profiles.exists():
+        written.append(plot_bed_profiles(profiles, out_dir / "preheat_profiles.png"))
     return written
+
+
+def plot_bed_profiles(csv_path: Path, png_path: Path) -> Path:
+    """Solid temperature against height at each profile time: the run's bins (dots), Schumann
+    (lines) and source 4's explicit scheme (dashed)."""
+    import matplotlib.pyplot as plt
+
+    prof = read_series(csv_path)
+    fig, ax = plt.subplots(figsize=(7, 5))
+    times = np.unique(prof["time_s"])
+    colours = plt.cm.viridis(np.linspace(0.0, 0.9, len(times)))
+    for t, colour in zip(times, colours):
+        sel = prof["time_s"] == t
+        z = prof["height_m"][sel]
+        ax.plot(z, prof["T_schumann_K"][sel], "-", color=colour, lw=1.5, label=f"{t:.0f} s")
+        ax.plot(z, prof["T_explicit_K"][sel], "--", color=colour, lw=1.0)
+        ax.plot(z, prof["T_solid_K"][sel], "o", color=colour, ms=3)
+    ax.plot([], [], "k-", label="Schumann")
+    ax.plot([], [], "k--", label="explicit scheme (source 4)")
+    ax.plot([], [], "ko", ms=3, label="tidem (bin means)")
+    ax.set_xlabel("Height above the gas inlet [m]")
+    ax.set_ylabel("Solid temperature [K]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=2)
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=110)
+    plt.close(fig)
+    return png_path

@@ -81,6 +81,29 @@ def observable_checks(scene: Scene) -> list[str]:
     return [f"observables: '{name}' {need}" for name in scene.observables if (need := requirement(name, scene))]
 
 
+def profile_checks(scene: Scene) -> list[str]:
+    """The packed-bed profiles compare with Schumann's model: a fixed bed at one starting
+    temperature, heated by a uniform gas stream switched on at t = 0 (the observable's own
+    requirement, [heat] and [gas], is checked with the other observables)."""
+    out = scene.output
+    if "packed_bed_profiles" not in scene.observables:
+        return [f"output.{key}: used only by the 'packed_bed_profiles' observable; add it to observables "
+                "or remove the key" for key in ("profile_times", "profile_bins") if getattr(out, key) is not None]
+    if scene.heat is None or scene.gas is None:
+        return []
+    key = "observables: 'packed_bed_profiles'"
+    errs: list[str] = []
+    moving = [g.name for g in scene.particles if not g.fixed]
+    if moving:
+        errs.append(f"{key} needs a fixed bed; set fixed = true in the particle groups {', '.join(moving)}")
+    starts = {g.temperature or scene.heat.initial_temperature for g in scene.particles}
+    if len(starts) > 1:
+        errs.append(f"{key} needs every particle to start at one temperature (got {sorted(starts)} K)")
+    if scene.gas.nozzles or scene.gas.inlet_ramp > 0:
+        errs.append(f"{key} needs a uniform gas inlet switched on at once; remove gas.nozzles and gas.inlet_ramp")
+    return errs
+
+
 def reaction_checks(scene: Scene) -> list[str]:
     """Each reaction names one particle group (one reaction per group) and has the phases it
     needs: heat for all, the gas for char combustion (with gas.oxygen) and sublimation."""
@@ -215,6 +238,7 @@ def cross_checks(scene: Scene) -> list[str]:
     errs += heat_checks(scene)
     errs += gas_checks(scene)
     errs += observable_checks(scene)
+    errs += profile_checks(scene)
     errs += reaction_checks(scene)
     errs += no_contact_checks(scene)
 

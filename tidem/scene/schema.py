@@ -219,6 +219,8 @@ class Output(Strict):
     smoke_steps: int = Field(default=300, ge=1)
     checkpoint_wall_s: Positive = 600.0
     checkpoint_interval: Positive | None = None
+    profile_times: list[Positive] | None = None
+    profile_bins: int | None = Field(default=None, ge=1)
 
 
 class Heat(Strict):
