@@ -59,7 +59,8 @@ class Output:
         else:
             (self.dir / "snapshots.pvd").unlink(missing_ok=True)
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
-        self.reactions = ReactionLog(self.dir, model) if model.features.reactions else None
+        self.reactions = (ReactionLog(self.dir, model, [tuple(r) for r in loop.get("reaction_rows", [])] if loop else None)
+                          if model.features.reactions else None)
         self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
                          if model.features.packed_bed_profiles else None)
 
@@ -282,6 +283,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                  "output": output_table, "wall_s": wall_before + time.perf_counter() - t0}
         if out.profiles is not None:
             state["profiles"] = out.profiles.state()
+        if out.reactions is not None:
+            state["reaction_rows"] = out.reactions.rows
         checkpoint.save(out.dir, solver, state, model.loaded.raw)
 
     bar = RunProgress(enabled=progress, t_end=t_end, particles=int(model.active0.sum()) or model.capacity)

@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 from tidem.cli import app
 from tidem.io.vtp import write_vtp
-from tidem.render.frames import FrameStyle, frame_size, render_frame
+from tidem.render.frames import FrameStyle, bar_format, frame_size, render_frame
 from tidem.render.gl import RenderUnavailable, prepare_offscreen
 
 try:
@@ -46,6 +46,27 @@ def test_slow_and_fast_particles_take_the_two_ends_of_the_colour_map(tmp_path):
     assert b > g and b > r, "the slow particle is at the dark purple end of viridis"
     r, g, b = fast.mean(axis=0)
     assert g > b and r > b, "the fast particle is at the yellow end of viridis"
+
+
+def test_powder_finer_than_a_pixel_is_drawn_and_labels_are_whole_kelvin(tmp_path):
+    """A 10 um grain in a 0.2 m frame (0.14 mm per pixel) shows as a dot of a few pixels
+    across (drawn 2 pixels in radius; at its own size it does not show at all); a 300-9000 K
+    bar is labelled 300 ... 9000, not 9e+03."""
+    import imageio.v2 as imageio
+
+    style = FrameStyle(field="speed", clim=(0.0, 1.0), colormap="viridis", size=frame_size("front", BOUNDS),
+                       view="front", bounds=BOUNDS, tubes=[])
+    dark = []
+    for name, radius in (("dust", 5e-6), ("none", None)):
+        snap = tmp_path / f"{name}.vtp"
+        points = np.array([[0.1, 0.01, 0.05]]) if radius else np.zeros((0, 3))
+        write_vtp(snap, points, {"radius": np.array([radius] if radius else []), "velocity": np.zeros((len(points), 3))})
+        render_frame(snap, 0.0, style, tmp_path / f"{name}.png")
+        img = imageio.imread(tmp_path / f"{name}.png")[:, : int(0.8 * style.size[0]), :3].astype(int)
+        dark.append(int((img.sum(axis=2) < 700).sum()))
+    assert dark[0] - dark[1] >= 9
+    assert bar_format((300.0, 9000.0)) == "%.0f" and bar_format((298.0, 500.0)) == "%.0f"
+    assert bar_format((0.0, 0.04)) == "%.3g"
 
 
 def test_scene_run_writes_frames_and_movie(tmp_path):

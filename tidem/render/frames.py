@@ -2,8 +2,10 @@
 
 Spheres are point sprites (VTK's point-Gaussian mapper with a per-point scale array and
 `render_points_as_spheres`), about 10x faster than glyph meshes on a CPU renderer and
-indistinguishable at video resolution. One colour range is used for the whole movie, so
-colours mean the same in every frame. Tubes are drawn as cylinders, the domain as an
+indistinguishable at video resolution. Particles under half a pixel in radius (fine powders,
+the 10 um grains of the plasma scene) are drawn two pixels in radius so that they show; larger
+ones keep their size. One colour
+range is used for the whole movie, so colours mean the same in every frame. Tubes are drawn as cylinders, the domain as an
 outline, and the simulated time as a stamp.
 """
 
@@ -75,11 +77,31 @@ def bar_labels(clim: tuple[float, float]) -> int:
     return whole + 1 if 2 <= whole <= 10 and abs(span - whole) < 1e-6 * max(1.0, span) else 5
 
 
+def bar_format(clim: tuple[float, float]) -> str:
+    """Colour-bar label format: whole numbers for ranges of 5 units or more above 100
+    (298 ... 500 K, 300 ... 9000 K), three significant digits otherwise (0 ... 0.04 m/s)."""
+    return "%.0f" if max(abs(clim[0]), abs(clim[1])) >= 100 and clim[1] - clim[0] >= 5 else "%.3g"
+
+
+def view_extent(view: str, bounds) -> tuple[float, float]:
+    """Width and height of the domain as the camera sees it [m]."""
+    return {"front": (bounds[1] - bounds[0], bounds[5] - bounds[4]),
+            "side": (bounds[3] - bounds[2], bounds[5] - bounds[4]),
+            "top": (bounds[1] - bounds[0], bounds[3] - bounds[2])}.get(view, (1.6, 1.0))
+
+
+def pixel_size(style: "FrameStyle") -> float:
+    """About one pixel of the frame in metres (the domain fills the height, or the width left
+    beside the colour bar)."""
+    if style.view not in ("front", "side", "top"):
+        return 0.0
+    ext = view_extent(style.view, style.bounds)
+    return max(ext[0] / max(style.size[0] - 240, 1), ext[1] / style.size[1])
+
+
 def frame_size(view: str, bounds, height: int = 720) -> tuple[int, int]:
     """Window size that fits the domain's projection, plus room for the colour bar (multiples of 16)."""
-    ext = {"front": (bounds[1] - bounds[0], bounds[5] - bounds[4]),
-           "side": (bounds[3] - bounds[2], bounds[5] - bounds[4]),
-           "top": (bounds[1] - bounds[0], bounds[3] - bounds[2])}.get(view, (1.6, 1.0))
+    ext = view_extent(view, bounds)
     aspect = ext[0] / ext[1]
     width = int(np.clip(height * aspect * 1.1 + 240, 480, 1920))
     return (width + 15) // 16 * 16, (height + 15) // 16 * 16
@@ -152,11 +174,12 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
     if len(points):
         cloud = pv.PolyData(np.ascontiguousarray(points, dtype=np.float32))
         cloud["values"] = values
-        cloud["radius"] = radius
+        px = pixel_size(style)
+        cloud["radius"] = np.where(radius < 0.5 * px, 2.0 * px, radius)
         actor = pl.add_mesh(
             cloud, scalars="values", style="points_gaussian", render_points_as_spheres=True, emissive=False,
             cmap=style.colormap, clim=style.clim,
-            scalar_bar_args=dict(title=title, fmt="%.3g", color="black", vertical=True, n_labels=bar_labels(style.clim),
+            scalar_bar_args=dict(title=title, fmt=bar_format(style.clim), color="black", vertical=True, n_labels=bar_labels(style.clim),
                                  position_x=0.80, position_y=0.15, height=0.7, width=0.05,
                                  title_font_size=15, label_font_size=14),
         )
