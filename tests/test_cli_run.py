@@ -8,6 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from tidem.cli import app
+from tidem.io.vtp import read_vti
 from tidem.io.vtp import read_vtp
 
 runner = CliRunner()
@@ -113,6 +114,12 @@ def test_shipped_scene_smoke(tmp_path, name):
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "finished" and 0 < run["steps"] <= 300
     assert (out / "snapshots.pvd").exists()
+    if any(m.startswith("gas") for m in run["active_models"]):  # the gas fields go with every snapshot
+        vti = sorted((out / "gas").glob("gas_*.vti"))
+        assert (out / "gas.pvd").exists() and len(vti) == len(list((out / "snapshots").glob("*.vtp")))
+        grid, fields = read_vti(vti[-1])
+        eps = fields["voidage"][fields["solid"] == 0]
+        assert grid["time"] > 0 and ((eps > 0) & (eps <= 1)).all()
 
 
 def test_every_shipped_scene_has_a_smoke_test():

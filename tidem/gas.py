@@ -387,6 +387,30 @@ class GasPhase:
                     out[f"tubes{k}_gas_heat_W"] = float(rate[k])
         return out
 
+    def cell_fields(self) -> dict[str, np.ndarray]:
+        """The gas state per cell for snapshots (`gas/*.vti`): voidage, pressure [Pa],
+        velocity at the cell centre [m/s] (mean of the two faces), with heat the temperature
+        [K], with O2 transport its mole fraction, and `solid` (1 inside a tube)."""
+        G = self.G
+        out = {"voidage": G.eps.to_numpy(), "pressure": G.p.to_numpy()}
+        centre = []
+        for c in range(3):
+            u = G.u[c].to_numpy()
+            if u.shape[c] == self.gg.cells[c]:  # periodic: the last face is the first
+                u = np.concatenate([u, np.take(u, [0], axis=c)], axis=c)
+            lo = np.take(u, range(self.gg.cells[c]), axis=c)
+            hi = np.take(u, range(1, self.gg.cells[c] + 1), axis=c)
+            centre.append(0.5 * (lo + hi))
+        out["velocity"] = np.stack(centre, axis=-1)
+        if self.heat:
+            out["temperature"] = G.T.to_numpy()
+        if self.species:
+            from tidem.reactions import M_O2
+
+            out["o2_mole_fraction"] = G.Y.to_numpy() * self.gas.oxygen.molar_mass / M_O2
+        out["solid"] = self.solid.astype(np.int32)
+        return out
+
     def mean_o2_mole_fraction(self) -> float:
         """Mean O2 mole fraction over the fluid cells."""
         from tidem.reactions import M_O2

@@ -19,7 +19,7 @@ from tidem import __version__, checkpoint
 from tidem import observables as obs
 from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
 from tidem.io.timeseries import TimeSeries
-from tidem.io.vtp import write_pvd, write_vtp
+from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.model import Model
 from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
@@ -50,14 +50,22 @@ class Output:
         self.snap_dir.mkdir(parents=True, exist_ok=True)
         self.model = model
         self.entries: list[tuple[float, str]] = [tuple(e) for e in loop["entries"]] if loop else []
+        self.gas_dir = self.dir / "gas" if model.features.gas else None
+        if self.gas_dir is not None:
+            self.gas_dir.mkdir(exist_ok=True)
         kept = {Path(name).name for _, name in self.entries}
         for old in self.snap_dir.glob("*.vtp"):
             if old.name not in kept:
                 old.unlink()
-        if self.entries:
-            write_pvd(self.dir / "snapshots.pvd", self.entries)
-        else:
-            (self.dir / "snapshots.pvd").unlink(missing_ok=True)
+        if self.gas_dir is not None:
+            for old in self.gas_dir.glob("*.vti"):
+                if old.name.replace("gas_", "snap_").replace(".vti", ".vtp") not in kept:
+                    old.unlink()
+        for pvd, entries in (("snapshots.pvd", self.entries), ("gas.pvd", self._gas_entries())):
+            if entries:
+                write_pvd(self.dir / pvd, entries)
+            else:
+                (self.dir / pvd).unlink(missing_ok=True)
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
         self.reactions = (ReactionLog(self.dir, model, [tuple(r) for r in loop.get("reaction_rows", [])] if loop else None)
                           if model.features.reactions else None)
@@ -80,8 +88,19 @@ class Output:
             "contacts": S.ncontact.to_numpy()[idx].astype(np.int32),
         }, time=solver.t)
         self.entries.append((solver.t, f"snapshots/{name}"))
+        if self.gas_dir is not None:
+            gg = solver.gas.gg
+            write_vti(self.gas_dir / name.replace("snap_", "gas_").replace(".vtp", ".vti"), gg.lo, gg.h, gg.cells,
+                      solver.gas.cell_fields(), time=solver.t)
+            write_pvd(self.dir / "gas.pvd", self._gas_entries())
         write_pvd(self.dir / "snapshots.pvd", self.entries)
         return self.snap_dir / name
+
+    def _gas_entries(self) -> list[tuple[float, str]]:
+        """gas.pvd's rows: the gas file written with each snapshot (runs with [gas])."""
+        if self.gas_dir is None:
+            return []
+        return [(t, name.replace("snapshots/snap_", "gas/gas_").replace(".vtp", ".vti")) for t, name in self.entries]
 
     def sample(self, solver: Solver) -> None:
         row = {"time_s": solver.t, "step": solver.steps}

@@ -1,5 +1,6 @@
-"""Plots of a run's time series (`plots/*.png`): energies, coordination, overlap and the
-scene's own columns against simulated time, drawn with matplotlib (which pyvista brings)."""
+"""Plots of a run (`plots/*.png`): energies, coordination, overlap and the scene's own
+columns against simulated time, the tube alpha profile, the packed-bed profiles, and maps of
+the gas at the last snapshot, drawn with matplotlib (which pyvista brings)."""
 
 from __future__ import annotations
 
@@ -91,7 +92,43 @@ def plot_timeseries(run_dir: Path) -> list[Path]:
     profiles = Path(run_dir) / "preheat_profiles.csv"
     if profiles.exists():
         written.append(plot_bed_profiles(profiles, out_dir / "preheat_profiles.png"))
+    gas_files = sorted((Path(run_dir) / "gas").glob("gas_*.vti"))
+    if gas_files:
+        written.append(plot_gas_maps(gas_files[-1], out_dir / "gas_maps.png"))
     return written
+
+
+GAS_MAPS = [("temperature", "Gas temperature [K]", "inferno"), ("o2_mole_fraction", "O$_2$ mole fraction [-]", "viridis"),
+            ("voidage", "Voidage [-]", "cividis"), ("speed", "Gas speed [m/s]", "viridis")]
+
+
+def plot_gas_maps(vti_path: Path, png_path: Path) -> Path:
+    """Maps of the gas at one snapshot, averaged over the depth (y): temperature and O2 where
+    the run has them, voidage and speed; tube cells blank."""
+    import matplotlib.pyplot as plt
+
+    from tidem.io.vtp import read_vti
+
+    grid, fields = read_vti(vti_path)
+    fields["speed"] = np.linalg.norm(fields["velocity"], axis=-1)
+    fluid = fields["solid"] == 0
+    shown = [m for m in GAS_MAPS if m[0] in fields]
+    cells, origin, spacing = grid["cells"], grid["origin"], grid["spacing"]
+    extent = [origin[0], origin[0] + cells[0] * spacing[0], origin[2], origin[2] + cells[2] * spacing[2]]
+    fig, axes = plt.subplots(1, len(shown), figsize=(3.2 * len(shown), 5.5), squeeze=False)
+    for ax, (key, label, cmap) in zip(axes[0], shown):
+        total = np.where(fluid, fields[key], 0.0).sum(axis=1)
+        count = fluid.sum(axis=1)
+        mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+        image = ax.imshow(mean.T, origin="lower", extent=extent, cmap=cmap, aspect="equal")
+        fig.colorbar(image, ax=ax, shrink=0.8).set_label(label)
+        ax.set_xlabel("x [m]")
+    axes[0][0].set_ylabel("z [m]")
+    fig.suptitle(f"Gas, mean over the depth (y), at t = {grid['time']:.4g} s")
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=110)
+    plt.close(fig)
+    return png_path
 
 
 def plot_bed_profiles(csv_path: Path, png_path: Path) -> Path:
