@@ -115,7 +115,7 @@ def plot_gas_maps(vti_path: Path, png_path: Path) -> Path:
     shown = [m for m in GAS_MAPS if m[0] in fields]
     cells, origin, spacing = grid["cells"], grid["origin"], grid["spacing"]
     extent = [origin[0], origin[0] + cells[0] * spacing[0], origin[2], origin[2] + cells[2] * spacing[2]]
-    fig, axes = plt.subplots(1, len(shown), figsize=(3.2 * len(shown), 5.5), squeeze=False)
+    fig, axes = plt.subplots(1, len(shown), figsize=(4.0 * len(shown), 5.5), squeeze=False)
     for ax, (key, label, cmap) in zip(axes[0], shown):
         total = np.where(fluid, fields[key], 0.0).sum(axis=1)
         count = fluid.sum(axis=1)
