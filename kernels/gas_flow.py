@@ -21,7 +21,10 @@ the top is a pressure outlet (p = 0 on the face); other box sides and faces of s
 periodic axes wrap.
 Gas energy (finite volume, particle exchange implicit, so stable for any exchange rate):
   rho c [eps^{n+1} T^{n+1} - eps^n T^n] V / dt + rho c sum_f (eps u)_f A_f T_f
-      = HT - H T^{n+1} + H_w (T_w - T^{n+1}),
+      = HT - H T^{n+1} + H_w (T_w - T^{n+1}) + k_g sum_f eps_f A_f (T_nb - T^n) / h_f,
+the last term Fourier conduction through the gas across interior faces (explicit, with
+`conduction`; none through walls, inlet or outlet; it needs alpha_g dt sum 1/h^2 within the
+limit `gas.gas_step_checks` enforces),
 T_f on interior faces the MUSCL value T_up + phi(r) (T_up - T_far) / 2 with van Leer's limiter
 phi(r) = (r + |r|)/(1 + |r|), r = (T_down - T_up)/(T_up - T_far) (van Leer 1979; total
 variation diminishing for Courant numbers up to 0.5, the limit the gas step enforces); T_far
@@ -44,10 +47,12 @@ SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread 
 
 
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
-                      tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False):
+                      tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
+                      conduction: bool = False):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas`); `tube_walls`
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy),
-    `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum)."""
+    `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
+    `conduction` Fourier conduction through the gas."""
     cic, corner, weight = make_cic(gg)
     n = gg.cells
     small = n[0] * n[1] * n[2] <= SERIAL_CELLS
@@ -409,6 +414,22 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                         boundary += flux * f_face
         return net, boundary
 
+    @ti.func
+    def gas_conduction(I):
+        """k_g sum over the interior faces of cell I of eps_f A_f (T_nb - T_I) / h [W]."""
+        out = 0.0
+        for c in ti.static(range(3)):
+            e = unit(c)
+            for side in ti.static((0, 1)):
+                f = I
+                nb = I - e
+                if ti.static(side == 1):
+                    f = face_index(I + e, c)
+                    nb = I + e
+                if K[c][f] == INTERIOR:
+                    out += face_eps(f, c) * area[c] * (G.T[cell_index(nb)] - G.T[I]) / h[c]
+        return k_gas * out
+
     @ti.kernel
     def energy(dt: ti.f64, t_in: ti.f64):
         """Advection of eps T (MUSCL faces) with implicit particle and tube exchange (module docstring);
@@ -426,6 +447,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                     extra = G.Qs[I]
                     G.Qs[I] = 0.0
                     G.bsum[0] += -dt * rho_c * boundary
+                if ti.static(conduction):
+                    extra += dt * gas_conduction(I)
                 hw = 0.0  # tube convection conductance [W/K] and its heat source hw T_w [W]
                 hw_tw = 0.0
                 if ti.static(tube_walls):

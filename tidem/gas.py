@@ -181,6 +181,16 @@ def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray,
         stable = max(1, int(0.5 / (gas.viscosity / gas.density * dt * sum(1 / h**2 for h in gg.h))))
         errs.append(f"gas.coupling_interval: the gas diffusion number nu dt sum(1/h^2) = {diffusion:.2f} exceeds 0.5; "
                     f"use coupling_interval <= {stable} or larger gas cells")
+    if scene.heat is not None and gas.conduction:
+        # explicit conduction stays positive while alpha dt sum(2/h^2) eps_f/eps <= 1, and a face
+        # between a cell at min_voidage and an empty one has eps_f/eps = (1 + 1/min_voidage)/2
+        per_dt = (scene.heat.gas_conductivity / (gas.density * gas.heat_capacity) * sum(1 / h**2 for h in gg.h)
+                  * (1 + 1 / gas.min_voidage) / 2)
+        if per_dt * dt_gas > 0.5:
+            stable = max(1, int(0.5 / (per_dt * dt)))
+            errs.append(f"gas.conduction: the gas conduction number alpha dt sum(1/h^2) (1 + 1/min_voidage)/2 = "
+                        f"{per_dt * dt_gas:.2f} exceeds 0.5; use gas.coupling_interval <= {stable}, larger gas cells, "
+                        "or gas.conduction = false")
     return errs
 
 
@@ -256,7 +266,8 @@ class GasPhase:
         self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
-                                      gas.heat_capacity * gas.viscosity / k_gas, self.sources)
+                                      gas.heat_capacity * gas.viscosity / k_gas, self.sources,
+                                      self.heat and gas.conduction)
         self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,

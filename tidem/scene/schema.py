@@ -276,6 +276,7 @@ class Gas(Strict):
     drag: Literal["gidaspow", "di_felice"] = "gidaspow"
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["churchill_bernstein", "none"] = "churchill_bernstein"
+    conduction: bool = True
     coupling_interval: int = Field(default=10, ge=1)
     tolerance: Positive = 1e-8
     max_iterations: int = Field(default=2000, ge=1)
