@@ -127,3 +127,15 @@ def test_every_shipped_scene_has_a_smoke_test():
 
     params = test_shipped_scene_smoke.pytestmark[0].args[1]
     assert sorted(shipped_scenes()) == sorted(params)
+
+
+def test_every_shipped_scene_has_a_gallery_frame_in_the_readme():
+    from pathlib import Path
+
+    from tidem.scene.load import shipped_scenes
+
+    root = Path(__file__).resolve().parent.parent
+    readme = (root / "README.md").read_text()
+    for name in shipped_scenes():
+        frame = f"renders/gallery/{name.removesuffix('.toml')}.png"
+        assert (root / frame).is_file() and frame in readme, frame
