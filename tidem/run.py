@@ -154,7 +154,10 @@ def distributor_parts(scene) -> list[dict]:
     return parts
 
 
-def summary(model: Model, solver: Solver | None, status: str, wall: float, message: str = "") -> dict:
+def summary(model: Model, solver: Solver | None, status: str, wall: float, message: str = "",
+            mean_particles: float | None = None) -> dict:
+    """run.json's table; particle_steps_per_s counts `mean_particles` (the time-series mean,
+    for runs whose particle count changes: pours, outlets, reactions) or else the particles now."""
     steps = solver.steps if solver else 0
     n = int(model.active0.sum()) if solver is None else int(solver.state.active.to_numpy().sum())
     f = model.features
@@ -176,7 +179,7 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
         "dt_limit_s": model.scales.limit,
         "neighbour_rebuilds": solver.rebuilds if solver else 0,
         "wall_s": wall,
-        "particle_steps_per_s": n * steps / wall if wall > 0 else 0.0,
+        "particle_steps_per_s": (n if mean_particles is None else mean_particles) * steps / wall if wall > 0 else 0.0,
         "precision": f.precision,
         "scene_echo": model.loaded.raw,
         "render": render_settings(model),
@@ -357,7 +360,9 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             out.write_alpha_profile(solver)
         bed_profiles = out.write_bed_profiles(solver)
         wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
-        data = summary(model, solver, status, wall, message)
+        counts = read_series(out.series.path).get("particles") if out.series.path.is_file() else None
+        data = summary(model, solver, status, wall, message,
+                       float(np.mean(counts)) if counts is not None and len(counts) else None)
         data["setup_s"] = setup_s
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])
