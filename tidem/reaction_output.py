@@ -82,7 +82,8 @@ class ReactionLog:
             hot = np.array([np.nanmax(data[sel & (data[:, 0] == t), 3]) for t in times])
             ax.plot(times, mean(3), label=f"{r.group}: particle T (mean)")
             ax.plot(times, hot, ":", label=f"{r.group}: particle T (hottest tracked)")
-            ax.plot(times, mean(4), "--", label=f"{r.group}: gas T at the particles")
+            if self.model.features.gas:
+                ax.plot(times, mean(4), "--", label=f"{r.group}: gas T at the particles")
             if r.type == "char_combustion":
                 ax2 = ax2 or ax.twinx()
                 ax2.plot(times, mean(5), color="tab:green", label="O2 mole fraction at the char")
