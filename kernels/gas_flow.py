@@ -415,8 +415,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
         return net, boundary
 
     @ti.func
-    def gas_conduction(I):
-        """k_g sum over the interior faces of cell I of eps_f A_f (T_nb - T_I) / h [W]."""
+    def interior_diffusion(F: ti.template(), I):
+        """Sum over the interior faces of cell I of eps_f A_f (F_nb - F_I) / h [unit of F m]: the
+        diffusive exchange of gas conduction (here) and of species transport (`species`)."""
         out = 0.0
         for c in ti.static(range(3)):
             e = unit(c)
@@ -427,8 +428,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                     f = face_index(I + e, c)
                     nb = I + e
                 if K[c][f] == INTERIOR:
-                    out += face_eps(f, c) * area[c] * (G.T[cell_index(nb)] - G.T[I]) / h[c]
-        return k_gas * out
+                    out += face_eps(f, c) * area[c] * (F[cell_index(nb)] - F[I]) / h[c]
+        return out
 
     @ti.kernel
     def energy(dt: ti.f64, t_in: ti.f64):
@@ -448,7 +449,7 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                     G.Qs[I] = 0.0
                     G.bsum[0] += -dt * rho_c * boundary
                 if ti.static(conduction):
-                    extra += dt * gas_conduction(I)
+                    extra += dt * k_gas * interior_diffusion(G.T, I)
                 hw = 0.0  # tube convection conductance [W/K] and its heat source hw T_w [W]
                 hw_tw = 0.0
                 if ti.static(tube_walls):
@@ -470,7 +471,5 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     if heat:
         kernels["energy"] = energy
     kernels["upwind"] = upwind
-    kernels["face_eps"] = face_eps
-    kernels["cell_index"] = cell_index
-    kernels["face_index"] = face_index
+    kernels["interior_diffusion"] = interior_diffusion
     return kernels

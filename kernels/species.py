@@ -14,15 +14,11 @@ inlet and outlet is summed in bsum[1] [kg], so O2 in the gas + O2 consumed - bsu
 
 import taichi as ti
 
-from .gas_flow import INTERIOR
-
 
 def make_species_kernel(gg, G, flow: dict, rho: float, diffusivity: float):
     """Return `species(dt, y_in)` advancing G.Y by one gas step."""
-    h = list(gg.h)
     vol = gg.volume
-    area = [gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]]
-    upwind, face_eps, face_index, cell_index = (flow[k] for k in ("upwind", "face_eps", "face_index", "cell_index"))
+    upwind, interior_diffusion = flow["upwind"], flow["interior_diffusion"]
 
     @ti.kernel
     def species(dt: ti.f64, y_in: ti.f64):
@@ -31,18 +27,7 @@ def make_species_kernel(gg, G, flow: dict, rho: float, diffusivity: float):
             G.Y_new[I] = G.Y[I]
             if G.solid[I] == 0:
                 net, boundary = upwind(G.Y, I, y_in, False)
-                diff = 0.0
-                for c in ti.static(range(3)):
-                    e = ti.Vector([0, 0, 0])
-                    e[c] = 1
-                    for side in ti.static((0, 1)):
-                        f = I
-                        nb = I - e
-                        if ti.static(side == 1):
-                            f = face_index(I + e, c)
-                            nb = I + e
-                        if G.kind[c][f] == INTERIOR:
-                            diff += face_eps(f, c) * area[c] * (G.Y[cell_index(nb)] - G.Y[I]) / h[c]
+                diff = interior_diffusion(G.Y, I)
                 y = (G.eps_old[I] * G.Y[I] * vol - dt * net + dt * diffusivity * diff - G.o2_sink[I] / rho) \
                     / (G.eps[I] * vol)
                 G.o2_sink[I] = 0.0

@@ -193,13 +193,13 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
     return out
 
 
-def observed(model: Model, solver: Solver, series_path: Path, bed_profiles: dict | None = None) -> dict:
+def observed(model: Model, solver: Solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None) -> dict:
     """run.json's `observables` (the scene's declared ones, `tidem.observables`) and the
     per-particle or per-time tables behind some of them."""
     names = model.scene.observables
     if not names:
         return {}
-    rec = obs.record(model, solver, read_series(series_path), bed_profiles)
+    rec = obs.record(model, solver, series, bed_profiles)
     out = {"observables": obs.compute(names, rec)}
     if bed_profiles:
         out["packed_bed_profiles"] = bed_profiles
@@ -360,14 +360,15 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             out.write_alpha_profile(solver)
         bed_profiles = out.write_bed_profiles(solver)
         wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
-        counts = read_series(out.series.path).get("particles") if out.series.path.is_file() else None
+        series = read_series(out.series.path) if out.series.path.is_file() else {}
+        counts = series.get("particles")
         data = summary(model, solver, status, wall, message,
                        float(np.mean(counts)) if counts is not None and len(counts) else None)
         data["setup_s"] = setup_s
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])
         if status == "finished":
-            data.update(observed(model, solver, out.series.path, bed_profiles))
+            data.update(observed(model, solver, series, bed_profiles))
         if out.reactions is not None:  # per reaction group, and flat in observables for tradeoff/sweep
             figures = out.reactions.finish(solver)
             data["reactions"] = figures
