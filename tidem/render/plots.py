@@ -121,7 +121,10 @@ def plot_gas_maps(vti_path: Path, png_path: Path) -> Path:
         count = fluid.sum(axis=1)
         mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
         image = ax.imshow(mean.T, origin="lower", extent=extent, cmap=cmap, aspect="equal")
-        fig.colorbar(image, ax=ax, shrink=0.8).set_label(label)
+        bar = fig.colorbar(image, ax=ax, shrink=0.8)
+        bar.set_label(label)
+        bar.formatter.set_useOffset(False)  # 1123.05 K, not 0.05 + 1.123e3
+        bar.update_ticks()
         ax.set_xlabel("x [m]")
     axes[0][0].set_ylabel("z [m]")
     fig.suptitle(f"Gas, mean over the depth (y), at t = {grid['time']:.4g} s")
