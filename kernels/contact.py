@@ -18,12 +18,13 @@ import taichi as ti
 
 from .contact_laws import make_contact_response
 from .geometry import make_geometry
-from .heat import pfp_conductance, spot_conductance, wall_conductance
+from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radiation
 
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
-                      angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True):
+                      angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
+                      radiation: bool = False, foil: bool = False):
     """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
     the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
@@ -33,7 +34,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     fluid_layer * min(r_i, r_j), touching or not, and between a surface with a temperature and
     a particle within fluid_layer * r_i of it that does not touch it (R* = r_i; a touching one
     conducts by Schluender's coefficient instead). `pairs = False` (contact.model = 'none') skips the
-    neighbour list: gravity and walls only."""
+    neighbour list: gravity and walls only. `radiation` adds grey radiation from a heated surface
+    to the particles touching it; with `foil`, a tube with tube_foil[k][0] > 0 (a heat flux) has
+    the temperature of its foil in the angle bin of the contact point, tube_bin_T[k, b]."""
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
@@ -71,15 +74,31 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         return delta, n, u
 
     @ti.func
-    def surface_heat(s: ti.template(), nrm, flow):
-        """Book a particle's heat flow from surface s, and from a tube by angle of the contact point."""
-        ti.atomic_add(S.surf_rate[s], flow)
+    def tube_bin(s: ti.template(), nrm):
+        """Angle bin of the contact point on tube s (0 for planes and without angle bins)."""
+        b = 0
         if ti.static(angle_bins > 0 and s >= n_planes):
             off = -nrm
             omega = ti.atan2(off.dot(S.tube_side[s - n_planes]), off[2])
             if omega < 0.0:
                 omega += 2.0 * 3.141592653589793
             b = ti.min(ti.cast(omega / (2.0 * 3.141592653589793) * angle_bins, ti.i32), angle_bins - 1)
+        return b
+
+    @ti.func
+    def wall_temperature(s: ti.template(), b):
+        """The surface's fixed temperature, or a heated foil's temperature in angle bin b."""
+        t_wall = S.surf_T[s]
+        if ti.static(foil and s >= n_planes):
+            if S.tube_foil[s - n_planes][0] > 0.0:
+                t_wall = S.tube_bin_T[s - n_planes, b]
+        return t_wall
+
+    @ti.func
+    def surface_heat(s: ti.template(), b, flow):
+        """Book a particle's heat flow from surface s, and from a tube by angle bin b of the contact point."""
+        ti.atomic_add(S.surf_rate[s], flow)
+        if ti.static(angle_bins > 0 and s >= n_planes):
             ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.kernel
@@ -202,9 +221,13 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             S.wft[i, slot] = xi_new
                             if ti.static(heat):
                                 if S.surf_T[s] > 0.0:
-                                    flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (S.surf_T[s] - S.T[i])
+                                    b = tube_bin(s, nrm)
+                                    t_wall = wall_temperature(s, b)
+                                    flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (t_wall - S.T[i])
+                                    if ti.static(radiation):
+                                        flow += wall_radiation(S.ps[mat_i, s], ri, t_wall, S.T[i])
                                     heat_in += flow
-                                    surface_heat(s, nrm, flow)
+                                    surface_heat(s, b, flow)
                             if ti.static(rolling):
                                 S.wmr[i, slot] = mr_new
                             if ti.static(hysteretic):
@@ -217,9 +240,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             held &= ~(1 << s)
                         if ti.static(pfp):
                             if -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
-                                flow = pfp_conductance(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (S.surf_T[s] - S.T[i])
+                                b = tube_bin(s, nrm)
+                                flow = pfp_conductance(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
+                                    wall_temperature(s, b) - S.T[i])
                                 heat_in += flow
-                                surface_heat(s, nrm, flow)
+                                surface_heat(s, b, flow)
                 S.wmask[i] = held
                 S.f[i] = force
                 S.tq[i] = torque

@@ -39,9 +39,10 @@ import taichi as ti
 # Indices into a material-pair parameter vector.
 ESTAR, GSTAR, GAMMA, KAPPA, MU_S, MU_D, MU_R, ETA_R, UNLOAD_RATIO, E_I, E_J = range(11)
 # heat conduction (kernels/heat.py): solid conductivity of the pair, contact-radius correction
-# for a softened modulus, gas conductivity, mean free path + roughness (wall contacts)
-K_EFF, A_CORR, LAMBDA_GAS, GAP = range(11, 15)
-N_PARAMS = 15
+# for a softened modulus, gas conductivity, mean free path + roughness (wall contacts), and
+# the exchange emissivity of a particle-surface pair (0 without heat.radiation)
+K_EFF, A_CORR, LAMBDA_GAS, GAP, EMIS = range(11, 16)
+N_PARAMS = 16
 
 LINEAR, HERTZ, HYSTERETIC, NONE = 0, 1, 2, 3
 LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC, "none": NONE}

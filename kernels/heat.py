@@ -17,6 +17,10 @@
       H = int 2 pi lambda_g r dr / max(s, s_min)
         = 2 pi lambda_g R* [(max(s_min, s0) - s0) / s_min + ln(delta_f / max(s_min, s0))],
   s0 = max(h, 0), and 0 for h >= delta_f.
+* Radiation (heat.radiation; the alpha_rad of source 3 eq. 18): a particle touching a heated
+  surface exchanges grey radiation over the same share of the wall, pi d^2 / 4,
+      q = C sigma pi r^2 (T_w^4 - T_i^4),  C = 1 / (1/eps_p + 1/eps_w - 1)
+  (two parallel grey surfaces; Schluender's wall-to-first-layer exchange).
 The heat rate into particle i is q_i = sum_j H_ij (T_j - T_i) + sum_walls H_iw (T_w - T_i);
 a pair's H is computed identically from both sides, so the pair terms cancel exactly and
 an isolated bed keeps its heat to rounding.
@@ -25,7 +29,9 @@ an isolated bed keeps its heat to rounding.
 import numpy as np
 import taichi as ti
 
-from .contact_laws import A_CORR, GAP, K_EFF, LAMBDA_GAS
+from .contact_laws import A_CORR, EMIS, GAP, K_EFF, LAMBDA_GAS
+
+STEFAN_BOLTZMANN = 5.670374419e-8  # W/(m^2 K^4)
 
 
 def schluender_alpha_wp(lambda_gas, d, gap):
@@ -69,3 +75,9 @@ def wall_conductance(p, r, delta):
     x = 2.0 * p[GAP] / d
     alpha = 4.0 * p[LAMBDA_GAS] / d * ((1.0 + x) * ti.log(1.0 + 1.0 / x) - 1.0)
     return spot_conductance(p, r, delta) + alpha * 3.141592653589793 * r * r
+
+
+@ti.func
+def wall_radiation(p, r, t_wall, t_particle):
+    """Grey radiation from a surface to a particle touching it over pi r^2 [W] (module docstring)."""
+    return p[EMIS] * STEFAN_BOLTZMANN * 3.141592653589793 * r * r * (t_wall**4 - t_particle**4)

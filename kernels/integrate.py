@@ -13,9 +13,17 @@ import taichi as ti
 from .geometry import make_geometry
 
 
-def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0):
+def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False):
     """Return (kick_drift(n, dt), kick(n, dt)); with heat, `kick` also advances temperatures
-    explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s."""
+    explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s.
+
+    With `foil`, each heated-foil tube k (tube_foil[k] = (q_el, C_A, A_bin, G / ds^2), q_el > 0)
+    advances its foil temperature per angle bin b with the same flows the particles received:
+        C_A dT_b/dt = q_el - Q_b / A_bin + (G / ds^2) (T_b-1 - 2 T_b + T_b+1),
+    q_el the electric heating per area, Q_b the heat into the bed from bin b, G the foil's
+    conductance along the circumference (k times thickness) and ds the bin's arc length; the
+    inner side is adiabatic (source 3's foil on a polyethylene tube). Heat is conserved
+    exactly: q_el A t = bed heat + foil heat. tube_bin_Tsum integrates T_b over time."""
     min_image, wrap, _cc, _cid = make_geometry(grid)
 
     @ti.kernel
@@ -37,6 +45,17 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         if ti.static(angle_bins > 0):
             for k, b in S.tube_bin_rate:
                 S.tube_bin_energy[k, b] += dt * S.tube_bin_rate[k, b]
+        if ti.static(foil):
+            for k, b in S.tube_bin_T:
+                foil_k = S.tube_foil[k]
+                if foil_k[0] > 0.0:
+                    t_b = S.tube_bin_T[k, b]
+                    along = S.tube_bin_T[k, (b + angle_bins - 1) % angle_bins] + S.tube_bin_T[k, (b + 1) % angle_bins]
+                    S.tube_bin_dT[k, b] = dt / foil_k[1] * (
+                        foil_k[0] - S.tube_bin_rate[k, b] / foil_k[2] + foil_k[3] * (along - 2.0 * t_b))
+                    S.tube_bin_Tsum[k, b] += dt * t_b
+            for k, b in S.tube_bin_T:
+                S.tube_bin_T[k, b] += S.tube_bin_dT[k, b]
         for i in range(n):
             if S.active[i]:
                 S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]

@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 from tidem.cli import app
 from tidem.io.vtp import read_vti
 from tidem.io.vtp import read_vtp
+from tidem.render.plots import read_series
 
 runner = CliRunner()
 
@@ -105,7 +106,8 @@ def test_check_prints_derived_numbers():
 
 @pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml", "moving_bed_ta1.toml",
                                   "moving_bed_ta2.toml", "fluidized_tube.toml", "char_combustion.toml",
-                                  "olefin_polymerization.toml", "plasma_sublimation.toml", "packed_bed_preheat.toml"])
+                                  "olefin_polymerization.toml", "plasma_sublimation.toml", "packed_bed_preheat.toml",
+                                  "moving_bed_foil.toml"])
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name
@@ -120,6 +122,9 @@ def test_shipped_scene_smoke(tmp_path, name):
         grid, fields = read_vti(vti[-1])
         eps = fields["voidage"][fields["solid"] == 0]
         assert grid["time"] > 0 and ((eps > 0) & (eps <= 1)).all()
+    if name == "moving_bed_foil.toml":  # the heated foil warms from the bed's temperature
+        foil = read_series(out / "timeseries.csv")["tubes1_foil_T_K"]
+        assert foil[0] == pytest.approx(293.15) and foil[-1] > foil[0] + 0.01
 
 
 def test_every_shipped_scene_has_a_smoke_test():

@@ -40,6 +40,8 @@ class Features:
     reactions: tuple[str, ...] = ()  # reaction types, in scene order
     species: bool = False  # O2 transported on the gas grid (char combustion)
     packed_bed_profiles: bool = False
+    radiation: bool = False  # grey radiation between heated surfaces and the particles touching them
+    foil: bool = False  # a heated-foil tube (fixed heat flux) with its own temperature per angle bin
 
     @property
     def contacts(self) -> bool:
@@ -68,6 +70,10 @@ class Features:
             out.append("heat (contact-spot conduction, gas-lens conduction between neighbours, "
                        "wall/tube conduction after Schluender)" if self.contacts
                        else "heat (particle temperatures; no conduction without contacts)")
+        if self.radiation:
+            out.append("radiation from heated walls and tubes to the particles touching them")
+        if self.foil:
+            out.append("heated-foil tubes (fixed heat flux, foil temperature per angle bin)")
         if self.gas:
             out.append("gas (voidage, drag, pressure projection" + (", gas energy)" if self.heat else ")"))
         if self.species:
@@ -260,6 +266,8 @@ def _pair_vector(a, b, wall_friction=None, heat=None) -> np.ndarray:
         p[cl.A_CORR] = (e_star / e_real) ** (1.0 / 3.0)
         p[cl.LAMBDA_GAS] = heat.gas_conductivity
         p[cl.GAP] = heat.gas_mean_free_path + heat.roughness
+        if heat.radiation and a.emissivity and b.emissivity:  # two grey parallel surfaces
+            p[cl.EMIS] = 1.0 / (1.0 / a.emissivity + 1.0 / b.emissivity - 1.0)
     return p
 
 
@@ -295,28 +303,78 @@ def _surfaces(scene, default_mat: str):
     for i, t in enumerate(scene.tubes):
         mask = [0.0 if AXES[a] == t.axis else 1.0 for a in range(3)]
         tubes.append(dict(name=f"tubes[{i}]", c=list(t.center), mask=mask, r=0.5 * t.diameter,
-                          material=t.material or default_mat, friction=t.friction, T=t.temperature))
+                          material=t.material or default_mat, friction=t.friction, T=t.temperature,
+                          flux=t.heat_flux, foil_C=t.foil_heat_capacity, foil_G=t.foil_conductance))
     return planes, tubes
 
 
-def _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors) -> float:
-    """Stability limit of the explicit temperature update: min over particles of m c / H_sum,
-    with H_sum the conductance of a full row of contacts at the largest allowed overlap
-    (contact spot 2 k a, a = sqrt(R* delta)) plus one wall contact (alpha_WP pi d^2 / 4), and
-    with particle-fluid-particle conduction up to 20 neighbours at its touching value."""
-    from tidem.kernels.heat import schluender_alpha_wp
+def angle_bin_area(model: "Model", tube: dict) -> float:
+    """Tube surface in one angle bin inside the domain [m^2]: arc 2 pi r / heat.angle_bins
+    times the domain's length along the tube axis."""
+    axis = 0 if tube["mask"][0] == 0.0 else 1
+    return 2 * math.pi * tube["r"] / model.angle_bins * model.grid.length[axis]
+
+
+def is_heated(surface: dict) -> bool:
+    """A plane or tube with a fixed temperature, or a heated-foil tube (fixed heat flux)."""
+    return surface["T"] is not None or surface.get("flux") is not None
+
+
+def _wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces) -> np.ndarray:
+    """Largest conductance [W/K] between each particle and a heated surface it touches:
+    Schluender's alpha_WP pi d^2 / 4, the contact spot 2 k a at the largest allowed overlap,
+    and with radiation its linearisation 4 sigma T^3 pi r^2 at the hottest fixed temperature."""
+    from tidem.kernels.heat import STEFAN_BOLTZMANN, schluender_alpha_wp
 
     h = scene.heat
     delta = scene.numerics.max_overlap * radius
     k = np.array([mats[m].conductivity or 0.0 for m in mat_names])[material]
+    out = schluender_alpha_wp(h.gas_conductivity, 2 * radius, h.gas_mean_free_path + h.roughness) * np.pi * radius**2
+    out = out + 2 * k * np.sqrt(radius * delta)
+    if h.radiation:
+        hottest = max([s["T"] for s in surfaces if s["T"] is not None] + [h.initial_temperature])
+        out = out + 4 * STEFAN_BOLTZMANN * hottest**3 * np.pi * radius**2
+    return out
+
+
+def _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors, surfaces) -> float:
+    """Stability limit of the explicit temperature update: min over particles of m c / H_sum,
+    with H_sum the conductance of a full row of contacts at the largest allowed overlap
+    (contact spot 2 k a, a = sqrt(R* delta)) plus one wall contact (`_wall_conductance_bound`),
+    and with particle-fluid-particle conduction up to 20 neighbours at its touching value."""
+    h = scene.heat
+    delta = scene.numerics.max_overlap * radius
+    k = np.array([mats[m].conductivity or 0.0 for m in mat_names])[material]
     a = np.sqrt(0.5 * radius * delta)
-    wall = schluender_alpha_wp(h.gas_conductivity, 2 * radius, h.gas_mean_free_path + h.roughness) * np.pi * radius**2
-    conductance = min(max_neighbors, 12) * 2 * k * a + wall + 2 * k * np.sqrt(radius * delta)
+    wall = _wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces)
+    conductance = min(max_neighbors, 12) * 2 * k * a + wall
     if h.fluid_layer > 0:  # every neighbour in the lens at the smallest gap
         s_min = h.gas_mean_free_path + h.roughness
         lens = 2 * np.pi * h.gas_conductivity * 0.5 * radius * (1 + np.log(np.maximum(h.fluid_layer * radius / s_min, 1)))
         conductance += min(max_neighbors, 20) * lens
     return float(np.min(heat_cap / np.maximum(conductance, 1e-300)))
+
+
+def foil_step_errors(scene, mats, mat_names, material, radius, tubes, dt) -> list[str]:
+    """The explicit foil update of a heated-foil tube (kernels/integrate.py) is stable while
+    dt (h_bed + 2 G / ds^2) / C_A <= 1: C_A the foil's heat capacity per area, h_bed the
+    largest bed-side conductance per area (the best wall conductance over the wall area of a
+    particle in a close-packed layer, 2 sqrt(3) r^2), G the foil's conductance along the
+    circumference, ds the arc length of one angle bin."""
+    foils = [(k, t) for k, t in enumerate(tubes) if t["flux"] is not None]
+    if not foils:
+        return []
+    wall = _wall_conductance_bound(scene, mats, mat_names, material, radius, tubes)
+    h_bed = float(np.max(wall / (2 * math.sqrt(3) * radius**2)))
+    errs = []
+    for k, t in foils:
+        ds = 2 * math.pi * t["r"] / scene.heat.angle_bins
+        rate = (h_bed + 2 * t["foil_G"] / ds**2) / t["foil_C"]
+        if dt * rate > 1.0:
+            errs.append(f"tubes[{k}].foil_heat_capacity: the explicit foil update needs dt <= C_A / (h_bed + 2 G / ds^2) "
+                        f"= {1 / rate:.3g} s, the time step is {dt:.3g} s; raise foil_heat_capacity above "
+                        f"{dt * rate * t['foil_C']:.3g} J/(m^2 K), lower foil_conductance, or lower the time step")
+    return errs
 
 
 def _too_soft(scene, law, mats, mat_names, material, radius, x0, active, speed) -> list[str]:
@@ -531,6 +589,8 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         reactions=tuple(r.type for r in scene.reactions),
         species=any(r.type == "char_combustion" for r in scene.reactions),
         packed_bed_profiles="packed_bed_profiles" in scene.observables,
+        radiation=scene.heat is not None and scene.heat.radiation and contacts,
+        foil=scene.heat is not None and any(t.heat_flux is not None for t in scene.tubes),
     )
     heat_cap = temperature0 = thermal_limit = None
     if scene.heat is not None:
@@ -540,12 +600,16 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         if scene.heat.fluid_layer > 0 and scene.heat.gas_mean_free_path + scene.heat.roughness <= 0:
             raise SceneError(src, ["heat.roughness: gas conduction between neighbours needs a smallest gap "
                                    "gas_mean_free_path + roughness > 0 (got 0); set roughness (e.g. 1e-6) or fluid_layer = 0"])
-        thermal_limit = _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, k) if contacts else None
+        thermal_limit = (_thermal_limit(scene, mats, mat_names, material, radius, heat_cap, k, planes + tubes)
+                         if contacts else None)
         if contacts and dt > thermal_limit:
             raise SceneError(src, [
                 f"heat: the time step {dt:.3g} s exceeds the explicit conduction limit {thermal_limit:.3g} s "
                 "(min over particles of m c / sum of contact conductances); raise materials.*.heat_capacity, "
                 "lower materials.*.conductivity, or lower the time step"])
+        foil_errors = foil_step_errors(scene, mats, mat_names, material, radius, tubes, dt)
+        if foil_errors:
+            raise SceneError(src, foil_errors)
     if scene.gas is not None:
         from tidem.gas import gas_step_checks
 
@@ -572,7 +636,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         wall_slots=num.max_wall_contacts if contacts else 1,
         t_end=end, gravity=tuple(dom.gravity), fixed=fixed, temperature0=temperature0, heat_capacity=heat_cap,
         thermal_limit=thermal_limit, fluid_layer=fluid_layer, heat_reach=heat_reach,
-        angle_bins=scene.heat.angle_bins if scene.heat is not None and any(t["T"] for t in tubes) else 0,
+        angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
     )
     too_big = memory_refusal(model)

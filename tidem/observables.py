@@ -28,6 +28,7 @@ import numpy as np
 
 from tidem.impact_conduction import hertz_impact, quasi_static_impact_heat, sun_chen_impact_heat
 from tidem.kernels import contact_laws as cl
+from tidem.model import angle_bin_area, is_heated
 from tidem.packet_model import packet_alpha
 from tidem.timestep import hertz_contact_time
 
@@ -132,8 +133,8 @@ def _late_mean(rec: RunRecord, column: str) -> float:
 
 
 def _heated_tube(scene) -> str | None:
-    if scene.heat is None or not any(t.temperature is not None for t in scene.tubes):
-        return "needs [heat] and a tube with a `temperature`"
+    if scene.heat is None or not any(t.temperature is not None or t.heat_flux is not None for t in scene.tubes):
+        return "needs [heat] and a tube with a `temperature` or a `heat_flux`"
     return None
 
 
@@ -147,7 +148,7 @@ def _gas(scene) -> str | None:
 
 @observable("tube_heat", needs=_heated_tube)
 def tube_heat(rec: RunRecord) -> dict[str, float]:
-    """Heat flow from each fixed-temperature surface into the bed [W] (`tubes1_heat_W`, named
+    """Heat flow from each heated surface into the bed [W] (`tubes1_heat_W`, named
     after the surface), time mean over the second half of the run (timeseries.csv)."""
     return {k: _late_mean(rec, k) for k in rec.series if k.endswith("_heat_W")}
 
@@ -156,7 +157,8 @@ def tube_heat(rec: RunRecord) -> dict[str, float]:
 def tube_mean_alpha(rec: RunRecord) -> dict[str, float]:
     """Mean heat-transfer coefficient of each heated tube [W/(m^2 K)] (`tube1_mean_alpha_W_m2K`):
     heat delivered since heat.profile_start / (time x tube area x (T_tube - heat.initial_temperature)),
-    source 3 eq. 34-36 averaged over the whole circumference."""
+    source 3 eq. 34-36 averaged over the whole circumference; for a heated foil the heating per
+    area over the foil's mean excess temperature (`alpha_profile`)."""
     return {f"tube{row['tube']}_mean_alpha_W_m2K": row["mean_alpha_W_m2K"] for row in rec.alpha_means}
 
 
@@ -355,34 +357,45 @@ def packet_model_rows(model, tube_means: list[dict]) -> list[dict]:
 
 def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
     """Local heat-transfer coefficient around each heated tube (source 3 eq. 34-36, ring
-    sectors): alpha(omega) = q(omega) / (T_wall - T_ref), q the time-averaged heat flux
-    through the sector of angle omega from the top of the tube since heat.profile_start,
-    T_ref = heat.initial_temperature (the temperature the bed enters with). With gas-tube
-    convection the mean alpha adds the tube's heat to the gas (gas_alpha) to the particles'.
-    Returns (rows of tube, angle_deg, alpha, and the mean alpha per tube)."""
+    sectors), time-averaged since heat.profile_start, T_ref = heat.initial_temperature (the
+    temperature the bed enters with):
+    * fixed temperature: alpha(omega) = q(omega) / (T_wall - T_ref), q the heat flux through
+      the sector of angle omega from the top of the tube;
+    * heated foil (source 3 eq. 4, as measured): alpha(omega) = q_el / (T_foil(omega) - T_ref),
+      q_el the electric heating per area and T_foil the foil's mean temperature in the sector;
+      the mean alpha is q_el / (circumference mean of T_foil - T_ref), and `foil_storage_pct`
+      is the share of the heating still warming the foil (0 in a steady state).
+    With gas-tube convection the mean alpha adds the tube's heat to the gas (gas_alpha) to
+    the particles'. Returns (rows of tube, angle_deg, alpha, and the mean alpha per tube)."""
     if not model.angle_bins or solver.profile_t0 is None or solver.t <= solver.profile_t0:
         return [], []
-    energy = solver.state.tube_bin_energy.to_numpy()
+    S = solver.state
+    energy = S.tube_bin_energy.to_numpy()
+    foil_T = S.tube_bin_Tsum.to_numpy() if model.features.foil else None
     gas_energy = solver.gas.G.wall_energy.to_numpy() if solver.gas is not None and solver.gas.walls else None
     span = solver.t - solver.profile_t0
     t_ref = model.scene.heat.initial_temperature
     rows, means = [], []
     bins = model.angle_bins
     for k, tube in enumerate(model.tubes):
-        if tube["T"] is None:
+        if not is_heated(tube):
             continue
-        axis = 0 if tube["mask"][0] == 0.0 else 1
-        length = model.grid.length[axis]
-        area = 2 * np.pi * tube["r"] / bins * length
-        dT = tube["T"] - t_ref
-        for b in range(bins):
-            rows.append({"tube": k, "angle_deg": (b + 0.5) * 360.0 / bins,
-                         "alpha_W_m2K": float(energy[k, b] / span / area / dT)})
-        mean = {"tube": k, "mean_alpha_W_m2K": float(energy[k].sum() / span / (area * bins) / dT),
-                "averaged_over_s": span}
-        if gas_energy is not None:  # convection to the gas joins the particles' share
-            mean["particles_alpha_W_m2K"] = mean["mean_alpha_W_m2K"]
-            mean["gas_alpha_W_m2K"] = float(gas_energy[k] / span / (area * bins) / dT)
-            mean["mean_alpha_W_m2K"] += mean["gas_alpha_W_m2K"]
+        area = angle_bin_area(model, tube)
+        if tube["flux"] is not None:
+            excess = foil_T[k] / span - t_ref
+            local = tube["flux"] / excess
+            mean = {"tube": k, "mean_alpha_W_m2K": float(tube["flux"] / excess.mean()), "averaged_over_s": span,
+                    "foil_storage_pct": float(100 * (1 - energy[k].sum() / (tube["flux"] * area * bins * span)))}
+        else:
+            dT = tube["T"] - t_ref
+            local = energy[k] / span / area / dT
+            mean = {"tube": k, "mean_alpha_W_m2K": float(energy[k].sum() / span / (area * bins) / dT),
+                    "averaged_over_s": span}
+            if gas_energy is not None:  # convection to the gas joins the particles' share
+                mean["particles_alpha_W_m2K"] = mean["mean_alpha_W_m2K"]
+                mean["gas_alpha_W_m2K"] = float(gas_energy[k] / span / (area * bins) / dT)
+                mean["mean_alpha_W_m2K"] += mean["gas_alpha_W_m2K"]
+        rows += [{"tube": k, "angle_deg": (b + 0.5) * 360.0 / bins, "alpha_W_m2K": float(local[b])}
+                 for b in range(bins)]
         means.append(mean)
     return rows, means

@@ -21,7 +21,7 @@ from tidem.kernels.diagnostics import make_energy_kernel
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.outlet import make_recycle_kernel
 from tidem.gas import GasError, GasPhase
-from tidem.model import Model
+from tidem.model import Model, is_heated
 from tidem.pour import Pourer
 from tidem.state import State, allocate
 
@@ -50,9 +50,9 @@ class Solver:
         self._forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes,
                                          f.n_tubes, model.wall_slots, model.gravity, S, f.contact_time,
                                          model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
-                                         f.contacts)
+                                         f.contacts, f.radiation, f.foil)
         self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
-                                                        model.angle_bins)
+                                                        model.angle_bins, f.foil)
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, S)
         self._recycle = None
@@ -111,6 +111,8 @@ class Solver:
             self.check()
         if self.model.angle_bins and self.profile_t0 is None and self.t >= self.model.scene.heat.profile_start:
             self.state.tube_bin_energy.fill(0.0)
+            if self.model.features.foil:
+                self.state.tube_bin_Tsum.fill(0.0)
             if self.gas is not None and self.gas.walls:
                 self.gas.G.wall_energy.fill(0.0)
             self.profile_t0 = self.t
@@ -171,11 +173,15 @@ class Solver:
         if len(T):
             out.update(T_mean_K=float(T.mean()), T_min_K=float(T.min()), T_max_K=float(T.max()))
         rate, energy = S.surf_rate.to_numpy(), S.surf_energy.to_numpy()
+        foil_T = S.tube_bin_T.to_numpy() if self.model.features.foil else None
+        n_planes = len(self.model.planes)
         for s, surf in enumerate(self.model.planes + self.model.tubes):
-            if surf["T"] is not None:
+            if is_heated(surf):
                 key = surf["name"].replace(" ", "_").replace("[", "").replace("]", "")
                 out[f"{key}_heat_W"] = float(rate[s])
                 out[f"{key}_heat_J"] = float(energy[s])
+                if surf.get("flux") is not None:
+                    out[f"{key}_foil_T_K"] = float(foil_T[s - n_planes].mean())
         return out
 
     def release(self) -> None:

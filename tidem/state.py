@@ -15,7 +15,12 @@ Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), 
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
-into the bed [W]) and surf_energy (its time integral [J]).
+into the bed [W]) and surf_energy (its time integral [J]); with angle bins around heated tubes
+tube_bin_rate / tube_bin_energy (the same by angle bin) and tube_side (the horizontal unit
+vector across each tube); with heated-foil tubes tube_foil (heating per area [W/m^2], foil
+heat capacity per area [J/(m^2 K)], bin area [m^2], G / ds^2 [W/(m^2 K)]; zeros for other
+tubes), tube_bin_T (foil temperature by angle bin [K]), tube_bin_dT (its change in the step)
+and tube_bin_Tsum (its time integral since the profile start [K s]).
 With gas (frozen between gas steps, see kernels/gas_coupling.py): gK (drag coefficient
 [kg/s]), geps (voidage), gu (gas velocity [m/s]) and ggp (pressure gradient [Pa/m]) at the
 particle; with heat also gH (gas-particle conductance [W/K]) and gT (gas temperature [K]).
@@ -37,7 +42,7 @@ import numpy as np
 import taichi as ti
 
 from tidem.kernels import contact_laws as cl
-from tidem.model import Model
+from tidem.model import Model, angle_bin_area
 
 
 class State(SimpleNamespace):
@@ -47,6 +52,14 @@ class State(SimpleNamespace):
         if getattr(self, "_tree", None) is not None:
             self._tree.destroy()
             self._tree = None
+
+
+def foil_vector(tube: dict, model: Model) -> list[float]:
+    """tube_foil's row for a tube (see the module docstring); zeros unless it has a heat flux."""
+    if tube["flux"] is None:
+        return [0.0, 1.0, 1.0, 0.0]
+    ds = 2 * np.pi * tube["r"] / model.angle_bins
+    return [tube["flux"], tube["foil_C"], angle_bin_area(model, tube), tube["foil_G"] / ds**2]
 
 
 def allocate(model: Model) -> State:
@@ -115,6 +128,11 @@ def allocate(model: Model) -> State:
             place((len(model.tubes), model.angle_bins), "tube_bin_rate")
             place((len(model.tubes), model.angle_bins), "tube_bin_energy", ti.f64)
             place((len(model.tubes),), "tube_side", n=3)
+        if feat.foil:
+            place((len(model.tubes),), "tube_foil", n=4)
+            place((len(model.tubes), model.angle_bins), "tube_bin_T")
+            place((len(model.tubes), model.angle_bins), "tube_bin_dT")
+            place((len(model.tubes), model.angle_bins), "tube_bin_Tsum", ti.f64)
     if feat.gas:
         for name in ("gK", "geps"):
             place((N,), name)
@@ -150,8 +168,12 @@ def allocate(model: Model) -> State:
     if feat.heat:
         S.T.from_numpy(model.temperature0)
         S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
-        temps = [p["T"] for p in model.planes] + [t["T"] for t in model.tubes]
+        T0 = model.scene.heat.initial_temperature  # a foil's own temperature is in tube_bin_T
+        temps = [p["T"] for p in model.planes] + [T0 if t["flux"] is not None else t["T"] for t in model.tubes]
         S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
+        if feat.foil:
+            S.tube_foil.from_numpy(np.array([foil_vector(t, model) for t in model.tubes]))
+            S.tube_bin_T.fill(T0)
         if model.angle_bins:
             S.tube_side.from_numpy(np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0]
                                              for t in model.tubes]))

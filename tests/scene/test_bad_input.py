@@ -98,6 +98,17 @@ def run_check(path, *extra):
          "materials.sus304.conductivity: required with [heat]"),
         (lambda r: r["particles"][0].update(diameter={"distribution": "gauss", "value": 0.01}),
          "distribution must be one of mono, uniform, normal, lognormal (got 'gauss')"),
+        (lambda r: r.update(tubes=[{"center": [0.0, 0.15, 0.0], "axis": "x", "diameter": 0.02, "temperature": 400.0,
+                                    "heat_flux": 1000.0}]),
+         "tubes[0]: give either 'temperature' (fixed wall temperature) or 'heat_flux' (heated foil), not both"),
+        (lambda r: (r.pop("heat"), r["particles"][0].pop("temperature"),
+                    r.update(tubes=[{"center": [0.0, 0.15, 0.0], "axis": "x", "diameter": 0.02, "heat_flux": 1000.0}])),
+         "tubes[0].heat_flux: temperatures need a [heat] table"),
+        (lambda r: r.update(tubes=[{"center": [0.0, 0.15, 0.0], "axis": "x", "diameter": 0.02, "heat_flux": 1000.0,
+                                    "foil_heat_capacity": 1e-9}]),
+         "tubes[0].foil_heat_capacity: the explicit foil update needs dt <="),
+        (lambda r: r["heat"].update(radiation=True),
+         "materials.sus304.emissivity: required with heat.radiation = true (used by particles[0], particles[1])"),
     ],
 )
 def test_bad_input_is_one_clear_message(tmp_path, edit, expected):

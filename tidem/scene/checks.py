@@ -31,6 +31,7 @@ def heat_checks(scene: Scene) -> list[str]:
     temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
     temps += [(f"walls[{i}].temperature", w.temperature) for i, w in enumerate(scene.walls)]
     temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
+    temps += [(f"tubes[{i}].heat_flux", t.heat_flux) for i, t in enumerate(scene.tubes)]
     if scene.heat is None:
         if scene.render.field == "temperature":
             errs.append("render.field: 'temperature' needs a [heat] table (particles have no temperature without it)")
@@ -44,6 +45,31 @@ def heat_checks(scene: Scene) -> list[str]:
         for key in ("conductivity", "heat_capacity"):
             if getattr(m, key) is None:
                 errs.append(f"materials.{name}.{key}: required with [heat] (particles of this material carry heat)")
+    if scene.gas is not None:
+        errs += [f"tubes[{i}].heat_flux: a heated-foil tube exchanges heat with the particles only, not with the "
+                 "gas; in a scene with [gas] give the tube a fixed 'temperature' instead"
+                 for i, t in enumerate(scene.tubes) if t.heat_flux is not None]
+    if scene.heat.radiation:
+        errs += radiation_checks(scene)
+    return errs
+
+
+def radiation_checks(scene: Scene) -> list[str]:
+    """heat.radiation needs the emissivity of every particle material and of every heated surface."""
+    default = scene.particles[0].material
+    heated = [(f"particles[{i}]", g.material) for i, g in enumerate(scene.particles)]
+    if scene.domain.wall_temperature is not None:
+        heated.append(("domain", scene.domain.wall_material or default))
+    heated += [(f"walls[{i}]", w.material or default) for i, w in enumerate(scene.walls) if w.temperature is not None]
+    heated += [(f"tubes[{i}]", t.material or default) for i, t in enumerate(scene.tubes)
+               if t.temperature is not None or t.heat_flux is not None]
+    errs = []
+    for name in sorted({m for _, m in heated}):
+        m = scene.materials.get(name)
+        if m is not None and m.emissivity is None:
+            users = ", ".join(who for who, mat in heated if mat == name)
+            errs.append(f"materials.{name}.emissivity: required with heat.radiation = true (used by {users}); "
+                        "give a value in (0, 1], e.g. 0.8 for sand, 0.3 for oxidised steel")
     return errs
 
 

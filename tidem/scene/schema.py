@@ -51,6 +51,7 @@ class Material(Strict):
     conductivity: Positive | None = None
     heat_capacity: Positive | None = None
     real_youngs_modulus: Positive | None = None
+    emissivity: Number | None = Field(default=None, gt=0.0, le=1.0)
 
     @model_validator(mode="after")
     def _dynamic_below_static(self):
@@ -157,7 +158,8 @@ class Wall(Strict):
 
 
 class Tube(Strict):
-    """An immersed horizontal tube (infinite cylinder along a horizontal axis)."""
+    """An immersed horizontal tube (infinite cylinder along a horizontal axis). A heated tube
+    has either a fixed `temperature` or a fixed `heat_flux` (source 3's heated foil)."""
 
     center: Vec3
     axis: Literal["x", "y"] = "y"
@@ -165,6 +167,15 @@ class Tube(Strict):
     material: str | None = None
     friction: NonNegative | None = None
     temperature: Positive | None = None
+    heat_flux: Positive | None = None
+    foil_heat_capacity: Positive = 200.0
+    foil_conductance: NonNegative = 0.0
+
+    @model_validator(mode="after")
+    def _one_heating(self):
+        if self.temperature is not None and self.heat_flux is not None:
+            raise ValueError("give either 'temperature' (fixed wall temperature) or 'heat_flux' (heated foil), not both")
+        return self
 
 
 class Outlet(Strict):
@@ -233,6 +244,7 @@ class Heat(Strict):
     fluid_layer: Number = Field(default=0.4, ge=0.0, le=1.0)
     angle_bins: int = Field(default=36, ge=4, le=720)
     profile_start: NonNegative = 0.0
+    radiation: bool = False
 
 
 class Nozzle(Strict):
