@@ -21,10 +21,11 @@ import taichi as ti
 from .geometry import make_geometry
 
 
-def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S):
+def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False):
     """Return `rebuild()` that refreshes `S.nbr`, `S.nbr_n` and moves the contact history.
 
-    S: a namespace of Taichi fields (see `tidem.state.State`).
+    S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
+    grow) each row also records the particle's radius at the build, `S.r_build`.
     """
     min_image, _wrap, cell_coord, cell_id = make_geometry(grid)
     cells = grid.cells
@@ -132,6 +133,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 S.nbr[i, k] = S.nbr_new[i, k]
             S.nbr_n[i] = count
             S.x_build[i] = xi
+            if ti.static(growth):
+                S.r_build[i] = S.radius[i]
 
     def rebuild(n: int) -> None:
         count_cells(n)

@@ -5,7 +5,9 @@ Step n -> n+1 (as in LAMMPS' fix nve/sphere):
   (forces at the new positions, with the half-step velocities in the dashpots)
   kick:        v += dt/2 f/m,  w += dt/2 T/I
 `kick_drift` also records the largest displacement since the last neighbour build in
-`max_disp[None]`; the run loop rebuilds the Verlet list when it exceeds half the skin.
+`max_disp[None]`; the run loop rebuilds the Verlet list when it exceeds half the skin. With
+growing particles the radius gained since the build counts as displacement (a pair's gap
+closes by both moves and both growths, so max(move + growth) <= skin / 2 keeps the list valid).
 """
 
 import taichi as ti
@@ -13,7 +15,8 @@ import taichi as ti
 from .geometry import make_geometry
 
 
-def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False):
+def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
+                     growth: bool = False):
     """Return (kick_drift(n, dt), kick(n, dt)); with heat, `kick` also advances temperatures
     explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s.
 
@@ -35,7 +38,10 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                 S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
                 x = wrap(S.x[i] + dt * S.v[i])
                 S.x[i] = x
-                ti.atomic_max(S.max_disp[None], min_image(x - S.x_build[i]).norm())
+                moved = min_image(x - S.x_build[i]).norm()
+                if ti.static(growth):
+                    moved += S.radius[i] - S.r_build[i]
+                ti.atomic_max(S.max_disp[None], moved)
 
     @ti.kernel
     def kick(n: ti.i32, dt: float):

@@ -14,7 +14,10 @@ Field 1969, Combust. Flame 13, 237: k_s = 8710 exp(-17967 K / T_p) g/(cm^2 s atm
   dm h_c (h_c the heat per kg C of tidem.reactions). `shrink` keeps the density (d ~ m^1/3),
   `density` keeps the diameter. A particle whose carbon is gone is removed.
 Polymerization (source 1, Kaneko et al. 1999): q = k_p p_M exp(-E/R (1/T - 1/T_ref)) m dH_p [W],
-  first order in the monomer partial pressure p_M.
+  first order in the monomer partial pressure p_M. With `growth` the polymer made stays on the
+  particle, dm = q dt / dH_p, at constant density (d ~ m^1/3; the mass grows as exp(k_p p_M t)
+  at constant T); the monomer brings its sensible heat c T dm (booked as negative ENTHALPY_OUT),
+  and a particle that reaches `max_diameter` stops reacting (the neighbour grid is sized for it).
 Sublimation (source 2 eq. 6): a particle at T_s turns the heat it receives into vapour,
   dm = q dt / L_u (equivalently dR/dt = -q / (rho_s L_u 4 pi R^2)), with q its whole heat rate
   (gas exchange with Nu = 2 in the Stokes regime, from `gas_coupling`); below T_s it warms, and
@@ -122,11 +125,22 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         return char
 
     def make_poly(rc):
+        grow = rc["grow"]
+
         @ti.func
         def poly(i, t, dt, steps_left, T, m, c):
-            q = rc["k"] * ti.exp(-rc["E_R"] * (1.0 / T - 1.0 / rc["T_ref"])) * m * rc["enthalpy"]
-            S.q[i] += q
-            S.rsum[HEAT_RELEASED] += q * dt
+            active = True
+            if ti.static(grow):
+                active = 2.0 * S.radius[i] < rc["d_max"]
+            if active:
+                q = rc["k"] * ti.exp(-rc["E_R"] * (1.0 / T - 1.0 / rc["T_ref"])) * m * rc["enthalpy"]
+                S.q[i] += q
+                S.rsum[HEAT_RELEASED] += q * dt
+                if ti.static(grow):
+                    dm = q * dt / rc["enthalpy"]
+                    S.rsum[REACTED] += dm
+                    S.rsum[ENTHALPY_OUT] -= c * T * dm
+                    set_mass(i, m + dm, True)
             return 0
 
         return poly

@@ -42,6 +42,7 @@ class Features:
     packed_bed_profiles: bool = False
     radiation: bool = False  # grey radiation between heated surfaces and the particles touching them
     foil: bool = False  # a heated-foil tube (fixed heat flux) with its own temperature per angle bin
+    growth: bool = False  # particles that grow (polymerization with growth)
 
     @property
     def contacts(self) -> bool:
@@ -80,6 +81,8 @@ class Features:
             out.append("O2 transport on the gas grid")
         for kind in dict.fromkeys(self.reactions):
             out.append(f"reaction: {kind.replace('_', ' ')}")
+        if self.growth:
+            out.append("particle growth (neighbour list rebuilt on growth + motion)")
         return out
 
 
@@ -591,6 +594,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         packed_bed_profiles="packed_bed_profiles" in scene.observables,
         radiation=scene.heat is not None and scene.heat.radiation and contacts,
         foil=scene.heat is not None and any(t.heat_flux is not None for t in scene.tubes),
+        growth=any(r.type == "polymerization" and r.growth for r in scene.reactions),
     )
     heat_cap = temperature0 = thermal_limit = None
     if scene.heat is not None:

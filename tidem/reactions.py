@@ -49,7 +49,8 @@ def reaction_constants(scene) -> list[dict]:
                      D=ox.diffusivity, sc=scene.gas.viscosity / (scene.gas.density * ox.diffusivity))
         elif r.type == "polymerization":
             c.update(k=r.rate_constant * r.monomer_pressure, E_R=r.activation_energy / R_GAS,
-                     T_ref=r.reference_temperature, enthalpy=r.enthalpy)
+                     T_ref=r.reference_temperature, enthalpy=r.enthalpy, grow=r.growth,
+                     d_max=r.max_diameter or 0.0)
         else:
             z = scene.domain.max[2] if r.exit_height is None else r.exit_height
             c.update(T_s=r.temperature, L=r.latent_heat, exit=z)
@@ -77,7 +78,12 @@ def reaction_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarr
         rho = float(density[sel][np.argmin(radius[sel])])
         key = f"reactions[{i}]"
         if r.type == "polymerization":
-            continue  # heat only: its explicit limit is the temperature step
+            if r.growth:  # mass added per step, at the reference temperature's rate
+                per_s = r.rate_constant * r.monomer_pressure
+                if per_s * dt > MAX_FRACTION:
+                    errs.append(f"{key}: a step of {dt:.3g} s grows a particle's mass by {100 * per_s * dt:.2g} % "
+                                f"(limit {100 * MAX_FRACTION:g} %); use numerics.dt <= {MAX_FRACTION / per_s:.3g}")
+            continue  # heat: its explicit limit is the temperature step
         temps = [heat.initial_temperature, gas.inlet_temperature or 0.0, gas.initial_temperature or 0.0]
         temps += [g.temperature or 0.0 for g in scene.particles]
         if r.type == "char_combustion":

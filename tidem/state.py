@@ -8,6 +8,7 @@ Per-particle fields, shape [capacity]:
   x, v, w          position [m], velocity [m/s], angular velocity [rad/s]
   f, tq            force [N], torque [N m] of the last force evaluation
   x_build          position at the last neighbour build [m]
+  r_build          radius at the last neighbour build [m] (only with growing particles)
   radius, mass, inv_mass [1/kg], inv_inertia [1/(kg m^2)], mat (material index), active
   ovl              largest overlap / smaller radius over the particle's contacts
   ncontact         number of contacts
@@ -81,6 +82,8 @@ def allocate(model: Model) -> State:
     # What the pair loop reads of a partner sits together in memory (array of structs).
     hot = [make(k, n=3) for k in ("x", "v", "w")] + [make("radius"), make("mass"), make("mat", ti.i32)]
     fb.dense(ti.i, N).place(*hot)
+    if feat.growth:
+        place((N,), "r_build")
     for name in ("f", "tq", "x_build"):
         place((N,), name, n=3)
     for name in ("inv_mass", "inv_inertia", "ovl"):
@@ -162,6 +165,8 @@ def allocate(model: Model) -> State:
     S.x_build.from_numpy(model.x0)
     S.v.from_numpy(model.v0 * movable[:, None])
     S.radius.from_numpy(radius)
+    if feat.growth:
+        S.r_build.from_numpy(radius)
     S.mass.from_numpy(model.mass)
     S.inv_mass.from_numpy(movable / model.mass)
     S.inv_inertia.from_numpy(movable / inertia)

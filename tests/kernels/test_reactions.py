@@ -159,6 +159,50 @@ def test_polymerization_heats_as_the_lumped_ode(solver_for, E):
         (s.state.T.to_numpy()[0] - 353.15) * s.model.heat_capacity[0], rel=1e-9)
 
 
+def test_growing_particle_gains_the_polymer_it_makes(solver_for):
+    """With growth and E = 0 the mass grows as m0 (1 + k p_M dt)^n (exp(k p_M t) to O(dt)) at
+    constant density, so d = d0 (m/m0)^(1/3); heat released = dH x polymer made, and the
+    particles' heat content grows by the heat released plus the monomer's sensible heat
+    (rsum[ENTHALPY_OUT] < 0), to rounding. At max_diameter the particle stops reacting."""
+    raw = poly_scene(0.0)
+    raw["reactions"][0].update(rate_constant=1e-6, growth=True, max_diameter=1.05e-3)  # k p_M = 1 /s
+    s = solver_for(raw)
+    m0, c = s.model.mass[0], 2000.0
+    for _ in range(100):
+        s.step()
+    m, r = s.state.mass.to_numpy()[0], s.state.radius.to_numpy()[0]
+    assert m == pytest.approx(m0 * (1 + 1e-3) ** 100, rel=1e-9)
+    assert 2 * r == pytest.approx(1e-3 * (m / m0) ** (1 / 3), rel=1e-9)
+    sums = s.state.rsum.to_numpy()
+    assert sums[REACTED] == pytest.approx(m - m0, rel=1e-9)
+    assert sums[HEAT_RELEASED] == pytest.approx(3.34e6 * (m - m0), rel=1e-9)
+    heat = m * c * s.state.T.to_numpy()[0] - m0 * c * 353.15
+    assert heat == pytest.approx(sums[HEAT_RELEASED] - sums[ENTHALPY_OUT], rel=1e-9)
+    for _ in range(200):  # d0 e^(t/3) reaches 1.05 mm at t = 0.146 s
+        s.step()
+    assert 2 * s.state.radius.to_numpy()[0] == pytest.approx(1.05e-3, rel=2e-3)
+    made = s.state.rsum.to_numpy()[REACTED]
+    s.step()
+    assert s.state.rsum.to_numpy()[REACTED] == made, "a particle at max_diameter no longer reacts"
+
+
+def test_growing_particles_find_each_other(solver_for):
+    """Two fixed particles 0.3 d_0 apart, beyond the neighbour skin (0.1 d_max): growth alone
+    must trigger the rebuilds that put them in each other's list before they touch."""
+    raw = poly_scene(0.0)
+    raw["particles"][0].update(positions=[[0, 0, 0], [1.3e-3, 0, 0]], fixed=True)
+    raw["reactions"][0].update(rate_constant=1e-6, growth=True, max_diameter=1.5e-3)
+    s = solver_for(raw)
+    rebuilds = s.rebuilds
+    touched_at = None
+    while touched_at is None and s.t < 1.0:
+        s.step()
+        if s.state.ncontact.to_numpy()[0] > 0:
+            touched_at = 2 * s.state.radius.to_numpy()[0]
+    assert s.rebuilds > rebuilds
+    assert touched_at == pytest.approx(1.3e-3, rel=2e-3), "they touch as soon as d reaches the distance"
+
+
 K_AR, RHO_AR, MU_AR, CP_AR = 0.5, 0.054, 2.6e-4, 520.0
 SIO2 = {"density": 2200.0, "youngs_modulus": 1e7, "conductivity": 1.4, "heat_capacity": 1000.0}
 T_S, L_U = 2500.0, 1.25e7

@@ -20,8 +20,9 @@ def largest_diameter(dist) -> float:
 
 
 def max_diameter(scene: Scene) -> float:
-    """Largest particle diameter the scene can produce [m]."""
-    return max(largest_diameter(g.diameter) for g in scene.particles)
+    """Largest particle diameter the scene can produce [m], growing particles at their cap."""
+    grown = [r.max_diameter for r in scene.reactions if r.type == "polymerization" and r.growth]
+    return max([largest_diameter(g.diameter) for g in scene.particles] + grown)
 
 
 def heat_checks(scene: Scene) -> list[str]:
@@ -150,6 +151,11 @@ def reaction_checks(scene: Scene) -> list[str]:
         if r.type == "char_combustion" and scene.gas is not None and scene.gas.oxygen is None:
             errs.append(f"{key}: char combustion needs the oxygen the gas carries; add gas.oxygen = "
                         "{ mole_fraction = 0.21 }")
+        if r.type == "polymerization" and r.growth and r.group in names:
+            start = largest_diameter(scene.particles[names.index(r.group)].diameter)
+            if r.max_diameter <= start:
+                errs.append(f"{key}.max_diameter: {r.max_diameter:g} m is not above the group's largest diameter "
+                            f"{start:g} m, so nothing could grow; raise it (e.g. {1.2 * start:.3g})")
         if r.type == "sublimation" and r.exit_height is not None:
             lo, hi = scene.domain.min[2], scene.domain.max[2]
             if not lo < r.exit_height <= hi:
@@ -269,7 +275,8 @@ def cross_checks(scene: Scene) -> list[str]:
     errs += no_contact_checks(scene)
 
     dmax = max_diameter(scene)
-    cell = dmax * (1.0 + scene.numerics.skin)
+    lens = 0.5 * scene.heat.fluid_layer if scene.heat is not None else 0.0  # the gas-lens reach (tidem.model)
+    cell = dmax * (1.0 + scene.numerics.skin + lens)
     for ax in dom.periodic:
         a = AXES.index(ax)
         length = dom.max[a] - dom.min[a]

@@ -317,6 +317,15 @@ class Polymerization(Strict):
     activation_energy: NonNegative = 0.0
     reference_temperature: Positive = 353.15
     enthalpy: Positive = 3.34e6
+    growth: bool = False
+    max_diameter: Positive | None = None
+
+    @model_validator(mode="after")
+    def _growth_needs_a_cap(self):
+        if self.growth and self.max_diameter is None:
+            raise ValueError("growth = true needs 'max_diameter' (m): the neighbour search is sized for it, and "
+                             "a particle stops reacting there (its catalyst spent); e.g. 1.2 x the group's diameter")
+        return self
 
 
 class Sublimation(Strict):
