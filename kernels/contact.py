@@ -24,7 +24,7 @@ from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radi
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
-                      radiation: bool = False, foil: bool = False):
+                      radiation: bool = False, foil: bool = False, wall_foil: bool = False):
     """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
     the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
@@ -36,7 +36,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     conducts by Schluender's coefficient instead). `pairs = False` (contact.model = 'none') skips the
     neighbour list: gravity and walls only. `radiation` adds grey radiation from a heated surface
     to the particles touching it; with `foil`, a tube with tube_foil[k][0] > 0 (a heat flux) has
-    the temperature of its foil in the angle bin of the contact point, tube_bin_T[k, b]."""
+    the temperature of its foil in the angle bin of the contact point, tube_bin_T[k, b]; with
+    `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's temperature plane_foil_T[s]."""
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
@@ -92,6 +93,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         if ti.static(foil and s >= n_planes):
             if S.tube_foil[s - n_planes][0] > 0.0:
                 t_wall = S.tube_bin_T[s - n_planes, b]
+        if ti.static(wall_foil and s < n_planes):
+            if S.plane_foil[s][0] > 0.0:
+                t_wall = S.plane_foil_T[s]
         return t_wall
 
     @ti.func

@@ -16,7 +16,7 @@ from .geometry import make_geometry
 
 
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
-                     growth: bool = False):
+                     growth: bool = False, wall_foil: bool = False, n_planes: int = 0):
     """Return (kick_drift(n, dt), kick(n, dt)); with heat, `kick` also advances temperatures
     explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s.
 
@@ -26,7 +26,9 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     q_el the electric heating per area, Q_b the heat into the bed from bin b, G the foil's
     conductance along the circumference (k times thickness) and ds the bin's arc length; the
     inner side is adiabatic (source 3's foil on a polyethylene tube). Heat is conserved
-    exactly: q_el A t = bed heat + foil heat. tube_bin_Tsum integrates T_b over time."""
+    exactly: q_el A t = bed heat + foil heat. tube_bin_Tsum integrates T_b over time. With
+    `wall_foil` a heated-foil plane s (plane_foil[s] = (q_el, C_A, A)) has one foil temperature,
+    C_A dT/dt = q_el - Q_s / A, Q_s its heat into the bed."""
     min_image, wrap, _cc, _cid = make_geometry(grid)
 
     @ti.kernel
@@ -62,6 +64,11 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                     S.tube_bin_Tsum[k, b] += dt * t_b
             for k, b in S.tube_bin_T:
                 S.tube_bin_T[k, b] += S.tube_bin_dT[k, b]
+        if ti.static(wall_foil):
+            for s in range(n_planes):
+                foil_s = S.plane_foil[s]
+                if foil_s[0] > 0.0:
+                    S.plane_foil_T[s] += dt / foil_s[1] * (foil_s[0] - S.surf_rate[s] / foil_s[2])
         for i in range(n):
             if S.active[i]:
                 S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]

@@ -42,6 +42,7 @@ class Features:
     packed_bed_profiles: bool = False
     radiation: bool = False  # grey radiation between heated surfaces and the particles touching them
     foil: bool = False  # a heated-foil tube (fixed heat flux) with its own temperature per angle bin
+    wall_foil: bool = False  # a heated-foil plane wall (fixed heat flux), one temperature per wall
     growth: bool = False  # particles that grow (polymerization with growth)
 
     @property
@@ -75,6 +76,8 @@ class Features:
             out.append("radiation from heated walls and tubes to the particles touching them")
         if self.foil:
             out.append("heated-foil tubes (fixed heat flux, foil temperature per angle bin)")
+        if self.wall_foil:
+            out.append("heated-foil walls (fixed heat flux, one foil temperature per wall)")
         if self.gas:
             out.append("gas (voidage, drag, pressure projection" + (", gas energy)" if self.heat else ")"))
         if self.species:
@@ -294,7 +297,8 @@ def _surfaces(scene, default_mat: str):
     for i, w in enumerate(scene.walls):
         n = np.asarray(w.normal, float)
         planes.append(dict(name=f"walls[{i}]", p0=list(w.point), n=list(n / np.linalg.norm(n)), vel=list(w.velocity),
-                           t=(0.0, NEVER), material=w.material or default_mat, friction=w.friction, T=w.temperature))
+                           t=(0.0, NEVER), material=w.material or default_mat, friction=w.friction, T=w.temperature,
+                           flux=w.heat_flux, foil_C=w.foil_heat_capacity, foil_G=0.0))
     if scene.outlet is not None and scene.outlet.type == "moving_plate":
         o = scene.outlet
         h = dom.min[2] if o.height is None else o.height
@@ -358,23 +362,25 @@ def _thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neigh
     return float(np.min(heat_cap / np.maximum(conductance, 1e-300)))
 
 
-def foil_step_errors(scene, mats, mat_names, material, radius, tubes, dt) -> list[str]:
-    """The explicit foil update of a heated-foil tube (kernels/integrate.py) is stable while
-    dt (h_bed + 2 G / ds^2) / C_A <= 1: C_A the foil's heat capacity per area, h_bed the
+def foil_step_errors(scene, mats, mat_names, material, radius, surfaces, dt) -> list[str]:
+    """The explicit foil update of a heated-foil tube or wall (kernels/integrate.py) is stable
+    while dt (h_bed + 2 G / ds^2) / C_A <= 1: C_A the foil's heat capacity per area, h_bed the
     largest bed-side conductance per area (the best wall conductance over the wall area of a
-    particle in a close-packed layer, 2 sqrt(3) r^2), G the foil's conductance along the
-    circumference, ds the arc length of one angle bin."""
-    foils = [(k, t) for k, t in enumerate(tubes) if t["flux"] is not None]
+    particle in a close-packed layer, 2 sqrt(3) r^2), G the foil's conductance along a tube's
+    circumference and ds the arc length of one angle bin (G = 0 for a wall)."""
+    foils = [s for s in surfaces if s.get("flux") is not None]
     if not foils:
         return []
-    wall = _wall_conductance_bound(scene, mats, mat_names, material, radius, tubes)
+    wall = _wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces)
     h_bed = float(np.max(wall / (2 * math.sqrt(3) * radius**2)))
     errs = []
-    for k, t in foils:
-        ds = 2 * math.pi * t["r"] / scene.heat.angle_bins
-        rate = (h_bed + 2 * t["foil_G"] / ds**2) / t["foil_C"]
+    for t in foils:
+        along = 0.0
+        if "r" in t:  # a tube: conduction between angle bins
+            along = 2 * t["foil_G"] / (2 * math.pi * t["r"] / scene.heat.angle_bins) ** 2
+        rate = (h_bed + along) / t["foil_C"]
         if dt * rate > 1.0:
-            errs.append(f"tubes[{k}].foil_heat_capacity: the explicit foil update needs dt <= C_A / (h_bed + 2 G / ds^2) "
+            errs.append(f"{t['name']}.foil_heat_capacity: the explicit foil update needs dt <= C_A / (h_bed + 2 G / ds^2) "
                         f"= {1 / rate:.3g} s, the time step is {dt:.3g} s; raise foil_heat_capacity above "
                         f"{dt * rate * t['foil_C']:.3g} J/(m^2 K), lower foil_conductance, or lower the time step")
     return errs
@@ -594,6 +600,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         packed_bed_profiles="packed_bed_profiles" in scene.observables,
         radiation=scene.heat is not None and scene.heat.radiation and contacts,
         foil=scene.heat is not None and any(t.heat_flux is not None for t in scene.tubes),
+        wall_foil=scene.heat is not None and any(w.heat_flux is not None for w in scene.walls),
         growth=any(r.type == "polymerization" and r.growth for r in scene.reactions),
     )
     heat_cap = temperature0 = thermal_limit = None
@@ -611,7 +618,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
                 f"heat: the time step {dt:.3g} s exceeds the explicit conduction limit {thermal_limit:.3g} s "
                 "(min over particles of m c / sum of contact conductances); raise materials.*.heat_capacity, "
                 "lower materials.*.conductivity, or lower the time step"])
-        foil_errors = foil_step_errors(scene, mats, mat_names, material, radius, tubes, dt)
+        foil_errors = foil_step_errors(scene, mats, mat_names, material, radius, planes + tubes, dt)
         if foil_errors:
             raise SceneError(src, foil_errors)
     if scene.gas is not None:

@@ -50,9 +50,9 @@ class Solver:
         self._forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes,
                                          f.n_tubes, model.wall_slots, model.gravity, S, f.contact_time,
                                          model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
-                                         f.contacts, f.radiation, f.foil)
+                                         f.contacts, f.radiation, f.foil, f.wall_foil)
         self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
-                                                        model.angle_bins, f.foil, f.growth)
+                                                        model.angle_bins, f.foil, f.growth, f.wall_foil, f.n_planes)
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, S)
         self._recycle = None
@@ -173,15 +173,17 @@ class Solver:
         if len(T):
             out.update(T_mean_K=float(T.mean()), T_min_K=float(T.min()), T_max_K=float(T.max()))
         rate, energy = S.surf_rate.to_numpy(), S.surf_energy.to_numpy()
-        foil_T = S.tube_bin_T.to_numpy() if self.model.features.foil else None
+        f = self.model.features
         n_planes = len(self.model.planes)
+        foil_T = list(S.plane_foil_T.to_numpy() if f.wall_foil else [None] * n_planes)
+        foil_T += list(S.tube_bin_T.to_numpy().mean(axis=1) if f.foil else [None] * len(self.model.tubes))
         for s, surf in enumerate(self.model.planes + self.model.tubes):
             if is_heated(surf):
                 key = surf["name"].replace(" ", "_").replace("[", "").replace("]", "")
                 out[f"{key}_heat_W"] = float(rate[s])
                 out[f"{key}_heat_J"] = float(energy[s])
                 if surf.get("flux") is not None:
-                    out[f"{key}_foil_T_K"] = float(foil_T[s - n_planes].mean())
+                    out[f"{key}_foil_T_K"] = float(foil_T[s])
         return out
 
     def release(self) -> None:

@@ -21,7 +21,8 @@ tube_bin_rate / tube_bin_energy (the same by angle bin) and tube_side (the horiz
 vector across each tube); with heated-foil tubes tube_foil (heating per area [W/m^2], foil
 heat capacity per area [J/(m^2 K)], bin area [m^2], G / ds^2 [W/(m^2 K)]; zeros for other
 tubes), tube_bin_T (foil temperature by angle bin [K]), tube_bin_dT (its change in the step)
-and tube_bin_Tsum (its time integral since the profile start [K s]).
+and tube_bin_Tsum (its time integral since the profile start [K s]); with heated-foil walls
+plane_foil (heating per area, foil heat capacity per area, wall area) and plane_foil_T [K].
 With gas (frozen between gas steps, see kernels/gas_coupling.py): gK (drag coefficient
 [kg/s]), geps (voidage), gu (gas velocity [m/s]) and ggp (pressure gradient [Pa/m]) at the
 particle; with heat also gH (gas-particle conductance [W/K]) and gT (gas temperature [K]).
@@ -61,6 +62,16 @@ def foil_vector(tube: dict, model: Model) -> list[float]:
         return [0.0, 1.0, 1.0, 0.0]
     ds = 2 * np.pi * tube["r"] / model.angle_bins
     return [tube["flux"], tube["foil_C"], angle_bin_area(model, tube), tube["foil_G"] / ds**2]
+
+
+def wall_foil_vector(plane: dict, model: Model) -> list[float]:
+    """plane_foil's row: heating per area [W/m^2], foil heat capacity per area [J/(m^2 K)] and
+    the wall's area, the domain's cross-section normal to it [m^2]; zeros without a heat flux."""
+    if plane.get("flux") is None:
+        return [0.0, 1.0, 1.0]
+    axis = int(np.argmax(np.abs(plane["n"])))
+    area = float(np.prod([model.grid.length[a] for a in range(3) if a != axis]))
+    return [plane["flux"], plane["foil_C"], area]
 
 
 def allocate(model: Model) -> State:
@@ -131,6 +142,9 @@ def allocate(model: Model) -> State:
             place((len(model.tubes), model.angle_bins), "tube_bin_rate")
             place((len(model.tubes), model.angle_bins), "tube_bin_energy", ti.f64)
             place((len(model.tubes),), "tube_side", n=3)
+        if feat.wall_foil:
+            place((len(model.planes),), "plane_foil", n=3)
+            place((len(model.planes),), "plane_foil_T")
         if feat.foil:
             place((len(model.tubes),), "tube_foil", n=4)
             place((len(model.tubes), model.angle_bins), "tube_bin_T")
@@ -174,11 +188,14 @@ def allocate(model: Model) -> State:
         S.T.from_numpy(model.temperature0)
         S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
         T0 = model.scene.heat.initial_temperature  # a foil's own temperature is in tube_bin_T
-        temps = [p["T"] for p in model.planes] + [T0 if t["flux"] is not None else t["T"] for t in model.tubes]
+        temps = [T0 if s.get("flux") is not None else s["T"] for s in model.planes + model.tubes]
         S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
         if feat.foil:
             S.tube_foil.from_numpy(np.array([foil_vector(t, model) for t in model.tubes]))
             S.tube_bin_T.fill(T0)
+        if feat.wall_foil:
+            S.plane_foil.from_numpy(np.array([wall_foil_vector(p, model) for p in model.planes]))
+            S.plane_foil_T.fill(T0)
         if model.angle_bins:
             S.tube_side.from_numpy(np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0]
                                              for t in model.tubes]))

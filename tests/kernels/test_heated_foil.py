@@ -32,33 +32,71 @@ def foil_scene(overlap=1e-5, angle_deg=80.0, **tube):
     )
 
 
+def two_body(c_f, c_p, power, h, t):
+    """Foil (C_f, heated with P) and sphere (C_p) joined by H, both from T0:
+    C_f T_f' = P - H (T_f - T_p), C_p T_p' = H (T_f - T_p). D = T_f - T_p relaxes to
+    D_inf = P C_p / (H (C_f + C_p)) at the rate H (1/C_f + 1/C_p); the sum follows
+    C_f T_f + C_p T_p = (C_f + C_p) T0 + P t. Returns (T_f, T_p, rate t)."""
+    rate = h * (1 / c_f + 1 / c_p)
+    d = power * c_p / (h * (c_f + c_p)) * (1 - math.exp(-rate * t))
+    t_f = T0 + (power * t + c_p * d) / (c_f + c_p)
+    return t_f, t_f - d, rate * t
+
+
+def touching_conductance(overlap):
+    """Contact spot plus Schluender's coefficient over pi r^2 of the steel sphere [W/K]."""
+    return 2 * 16.0 * math.sqrt(R * overlap) + schluender_alpha_wp(0.026, 2 * R, 1e-6 + 6.8e-8) * math.pi * R**2
+
+
+C_SPHERE = 7800 * 4 / 3 * math.pi * R**3 * 500.0
+
+
 def test_foil_and_touching_sphere_follow_the_two_body_solution(solver_for):
-    """Bin b of the foil (C_f = C_A A_b, heated with P = q A_b) and the sphere (C_p = m c) joined
-    by H: C_f T_f' = P - H (T_f - T_p), C_p T_p' = H (T_f - T_p). The difference D = T_f - T_p
-    relaxes to D_inf = P C_p / (H (C_f + C_p)) with rate H (1/C_f + 1/C_p); the sum follows
-    C_f T_f + C_p T_p = (C_f + C_p) T0 + P t. Untouched bins rise as q t / C_A."""
+    """Bin b of the foil (C_f = C_A A_b, heated with P = q A_b) and the sphere follow
+    `two_body`; untouched bins rise as q t / C_A."""
     overlap = 1e-5
     s = solver_for(foil_scene(overlap))
     area = 2 * math.pi * R_TUBE / BINS * DEPTH
-    c_f, c_p, power = FOIL_C * area, 7800 * 4 / 3 * math.pi * R**3 * 500.0, FLUX * area
-    h = 2 * 16.0 * math.sqrt(R * overlap) + schluender_alpha_wp(0.026, 2 * R, 1e-6 + 6.8e-8) * math.pi * R**2
-    rate = h * (1 / c_f + 1 / c_p)
     for _ in range(5000):
         s.step()
     t = s.t
-    assert t * rate > 2.0, "the test covers the relaxation"
-    d_inf = power * c_p / (h * (c_f + c_p))
-    d = d_inf * (1 - math.exp(-rate * t))
-    t_f = T0 + (power * t + c_p * d) / (c_f + c_p)
+    t_f, t_p, relaxed = two_body(FOIL_C * area, C_SPHERE, FLUX * area, touching_conductance(overlap), t)
+    assert relaxed > 2.0, "the test covers the relaxation"
     foil = s.state.tube_bin_T.to_numpy()[0]
     touched = int(80.0 / (360.0 / BINS))
     assert foil[touched] - T0 == pytest.approx(t_f - T0, rel=0.01)
-    assert s.state.T.to_numpy()[0] - T0 == pytest.approx(t_f - d - T0, rel=0.01)
+    assert s.state.T.to_numpy()[0] - T0 == pytest.approx(t_p - T0, rel=0.01)
     others = np.delete(foil, touched)
     assert np.allclose(others - T0, FLUX * t / FOIL_C, rtol=1e-9)
     # heat: electric heating = foil heat + sphere heat, to rounding
-    stored = FOIL_C * area * (foil - T0).sum() + c_p * (s.state.T.to_numpy()[0] - T0)
+    stored = FOIL_C * area * (foil - T0).sum() + C_SPHERE * (s.state.T.to_numpy()[0] - T0)
     assert stored == pytest.approx(FLUX * 2 * math.pi * R_TUBE * DEPTH * t, rel=1e-9)
+
+
+def test_heated_foil_wall_and_touching_sphere_follow_the_two_body_solution(solver_for):
+    """A plane wall with a heat flux: one foil over the domain's cross-section A (C_f = C_A A,
+    P = q A); the sphere on it follows `two_body`, and the heat is conserved to rounding."""
+    overlap, c_a, flux, c_sphere = 1e-5, 1.0, 1.0, C_SPHERE / 100  # relaxes within a second
+    raw = make_scene(
+        materials={"steel": {**STEEL, "heat_capacity": 5.0}},
+        walls=[{"point": [0, 0, -0.1], "normal": [0, 0, 1], "heat_flux": flux, "foil_heat_capacity": c_a}],
+        particles=[{"name": "p", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[0, 0, -0.1 + R - overlap]], "fixed": True}],
+        heat={"initial_temperature": T0},
+        numerics={"dt": 1e-3, "force_dt": True},
+    )
+    s = solver_for(raw)
+    area = 0.2 * 0.2
+    for _ in range(3000):
+        s.step()
+    t_f, t_p, relaxed = two_body(c_a * area, c_sphere, flux * area, touching_conductance(overlap), s.t)
+    foil, sphere = s.state.plane_foil_T.to_numpy()[0], s.state.T.to_numpy()[0]
+    assert relaxed > 2.0 and sphere - T0 > 1.0
+    assert foil - T0 == pytest.approx(t_f - T0, rel=0.01)
+    assert sphere - T0 == pytest.approx(t_p - T0, rel=0.01)
+    stored = c_a * area * (foil - T0) + c_sphere * (sphere - T0)
+    assert stored == pytest.approx(flux * area * s.t, rel=1e-9)
+    assert s.heat_summary()["walls0_foil_T_K"] == foil
 
 
 def test_alpha_of_a_foil_is_the_flux_over_the_foil_excess(solver_for):

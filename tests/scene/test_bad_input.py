@@ -107,6 +107,8 @@ def run_check(path, *extra):
         (lambda r: r.update(tubes=[{"center": [0.0, 0.15, 0.0], "axis": "x", "diameter": 0.02, "heat_flux": 1000.0,
                                     "foil_heat_capacity": 1e-9}]),
          "tubes[0].foil_heat_capacity: the explicit foil update needs dt <="),
+        (lambda r: r.update(walls=[{"point": [0.0, 0.0, -0.05], "normal": [0.0, 1.0, 1.0], "heat_flux": 500.0}]),
+         "walls[0]: a wall with 'heat_flux' needs a normal along x, y or z"),
         (lambda r: r["heat"].update(radiation=True),
          "materials.sus304.emissivity: required with heat.radiation = true (used by particles[0], particles[1])"),
     ],

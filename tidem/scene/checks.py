@@ -31,6 +31,7 @@ def heat_checks(scene: Scene) -> list[str]:
     temps = [("domain.wall_temperature", scene.domain.wall_temperature)]
     temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
     temps += [(f"walls[{i}].temperature", w.temperature) for i, w in enumerate(scene.walls)]
+    temps += [(f"walls[{i}].heat_flux", w.heat_flux) for i, w in enumerate(scene.walls)]
     temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
     temps += [(f"tubes[{i}].heat_flux", t.heat_flux) for i, t in enumerate(scene.tubes)]
     if scene.heat is None:
@@ -61,7 +62,8 @@ def radiation_checks(scene: Scene) -> list[str]:
     heated = [(f"particles[{i}]", g.material) for i, g in enumerate(scene.particles)]
     if scene.domain.wall_temperature is not None:
         heated.append(("domain", scene.domain.wall_material or default))
-    heated += [(f"walls[{i}]", w.material or default) for i, w in enumerate(scene.walls) if w.temperature is not None]
+    heated += [(f"walls[{i}]", w.material or default) for i, w in enumerate(scene.walls)
+               if w.temperature is not None or w.heat_flux is not None]
     heated += [(f"tubes[{i}]", t.material or default) for i, t in enumerate(scene.tubes)
                if t.temperature is not None or t.heat_flux is not None]
     errs = []

@@ -149,11 +149,20 @@ class Wall(Strict):
     friction: NonNegative | None = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
     temperature: Positive | None = None
+    heat_flux: Positive | None = None
+    foil_heat_capacity: Positive = 200.0
 
     @model_validator(mode="after")
     def _unit(self):
         if sum(c * c for c in self.normal) == 0:
             raise ValueError("normal must not be the zero vector")
+        if self.temperature is not None and self.heat_flux is not None:
+            raise ValueError("give either 'temperature' (fixed wall temperature) or 'heat_flux' (heated foil), not both")
+        if self.heat_flux is not None and sum(c != 0 for c in self.normal) != 1:
+            raise ValueError("a wall with 'heat_flux' needs a normal along x, y or z (its area is the domain's "
+                             "cross-section)")
+        if self.heat_flux is not None and any(self.velocity):
+            raise ValueError("a wall with 'heat_flux' must not move")
         return self
 
 
