@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tidem.averaging import AveragingLayout, averaging_layout
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.geometry import Grid
 from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
@@ -40,6 +41,7 @@ class Features:
     reactions: tuple[str, ...] = ()  # reaction types, in scene order
     species: bool = False  # O2 transported on the gas grid (char combustion)
     packed_bed_profiles: bool = False
+    averaging: bool = False  # time-averaged fields in cells and ring sectors ([averaging])
 
     @property
     def contacts(self) -> bool:
@@ -74,6 +76,8 @@ class Features:
             out.append("O2 transport on the gas grid")
         for kind in dict.fromkeys(self.reactions):
             out.append(f"reaction: {kind.replace('_', ' ')}")
+        if self.averaging:
+            out.append("local averaging (cells" + (", tube ring sectors)" if self.n_tubes else ")"))
         return out
 
 
@@ -114,6 +118,7 @@ class Model:
     heat_reach: float = 0.0  # extra neighbour-list reach for that lens [m]
     reaction_index: np.ndarray | None = None
     reaction_constants: list | None = None
+    averaging: AveragingLayout | None = None
 
     @property
     def scene(self):
@@ -531,6 +536,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         reactions=tuple(r.type for r in scene.reactions),
         species=any(r.type == "char_combustion" for r in scene.reactions),
         packed_bed_profiles="packed_bed_profiles" in scene.observables,
+        averaging=scene.averaging is not None,
     )
     heat_cap = temperature0 = thermal_limit = None
     if scene.heat is not None:
@@ -574,6 +580,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         thermal_limit=thermal_limit, fluid_layer=fluid_layer, heat_reach=heat_reach,
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(t["T"] for t in tubes) else 0,
         reaction_index=rx, reaction_constants=rconst,
+        averaging=averaging_layout(scene),
     )
     too_big = memory_refusal(model)
     if too_big:
