@@ -24,7 +24,8 @@ STEEL = {"density": 7800.0, "youngs_modulus": 2e11, "poisson_ratio": 0.3, "resti
 
 def lattice(n=(4, 2, 4)):
     """Centres of a simple cubic lattice of spacing A from the origin, half a spacing in."""
-    return [[A * (i + 0.5), A * (j + 0.5), A * (k + 0.5)] for i in range(n[0]) for j in range(n[1]) for k in range(n[2])]
+    return [[A * (i + 0.5), A * (j + 0.5), A * (k + 0.5)]
+            for i in range(n[0]) for j in range(n[1]) for k in range(n[2])]
 
 
 def free_particles(positions, size=(0.04, 0.02, 0.04), periodic=(), velocities=None, fixed=False, **tables):
