@@ -14,6 +14,7 @@ from tidem import checkpoint
 from tidem.cli import app
 from tidem.io.vtp import read_vtp
 from tidem.model import build_model
+from tidem.render.plots import read_series
 from tidem.run import run
 from tidem.scene.load import validate
 from tidem.solver import Solver
@@ -25,7 +26,8 @@ T_END = 0.06
 
 def hot_pour(t_end=T_END, **numerics):
     """Particles poured (random places, seeded) onto a heated floor with a tube: pour RNG,
-    tangential and rolling springs, wall and tube slots and temperatures all carry state."""
+    tangential and rolling springs, wall and tube slots, temperatures and the time-averaged
+    cells and ring sectors all carry state."""
     return make_scene(
         domain={"min": [0, 0, 0], "max": [0.016, 0.008, 0.03], "periodic": ["x"], "walls": "auto",
                 "gravity": [0, 0, -9.81]},
@@ -38,6 +40,7 @@ def hot_pour(t_end=T_END, **numerics):
                     "pour": {"region": {"min": [0, 0, 0.02], "max": [0.016, 0.008, 0.03]}, "rate": 2000.0}}],
         tubes=[{"center": [0.008, 0.0, 0.012], "axis": "y", "diameter": 0.004, "temperature": 350.0}],
         heat={"initial_temperature": 300.0},
+        averaging={"start": 0.01, "interval": 0.002, "cell_size": [0.004, 0.005], "rings": 2},
         numerics={"t_end": t_end, "dt_fraction": 0.3, **numerics},
         output={"interval": 0.01, "timeseries_interval": 0.002},
     )
@@ -57,6 +60,9 @@ def assert_same_run(a, b):
             assert np.array_equal(da[k], db[k]), k
     assert (a / "timeseries.csv").read_text() == (b / "timeseries.csv").read_text()
     assert (a / "snapshots.pvd").read_text() == (b / "snapshots.pvd").read_text()
+    for name in ("averages_cells.csv", "averages_rings.csv"):
+        assert (a / name).read_text() == (b / name).read_text(), name
+    assert read_series(a / "averages_cells.csv")["samples"][0] == 26  # t = 0.01, 0.012, ..., 0.06
 
 
 @pytest.fixture(scope="module")

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tidem.averaging import AveragingLayout, averaging_layout
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.geometry import Grid
 from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
@@ -44,6 +45,7 @@ class Features:
     foil: bool = False  # a heated-foil tube (fixed heat flux) with its own temperature per angle bin
     wall_foil: bool = False  # a heated-foil plane wall (fixed heat flux), one temperature per wall
     growth: bool = False  # particles that grow (polymerization with growth)
+    averaging: bool = False  # time-averaged fields in cells and ring sectors ([averaging])
 
     @property
     def contacts(self) -> bool:
@@ -86,6 +88,8 @@ class Features:
             out.append(f"reaction: {kind.replace('_', ' ')}")
         if self.growth:
             out.append("particle growth (neighbour list rebuilt on growth + motion)")
+        if self.averaging:
+            out.append("local averaging (cells" + (", tube ring sectors)" if self.n_tubes else ")"))
         return out
 
 
@@ -126,6 +130,7 @@ class Model:
     heat_reach: float = 0.0  # extra neighbour-list reach for that lens [m]
     reaction_index: np.ndarray | None = None
     reaction_constants: list | None = None
+    averaging: AveragingLayout | None = None
 
     @property
     def scene(self):
@@ -602,6 +607,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         foil=scene.heat is not None and any(t.heat_flux is not None for t in scene.tubes),
         wall_foil=scene.heat is not None and any(w.heat_flux is not None for w in scene.walls),
         growth=any(r.type == "polymerization" and r.growth for r in scene.reactions),
+        averaging=scene.averaging is not None,
     )
     heat_cap = temperature0 = thermal_limit = None
     if scene.heat is not None:
@@ -649,6 +655,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         thermal_limit=thermal_limit, fluid_layer=fluid_layer, heat_reach=heat_reach,
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
+        averaging=averaging_layout(scene),
     )
     too_big = memory_refusal(model)
     if too_big:

@@ -17,6 +17,7 @@ import numpy as np
 
 from tidem import __version__, checkpoint
 from tidem import observables as obs
+from tidem.averaging import AverageRecorder, write_averages
 from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
@@ -71,6 +72,9 @@ class Output:
                           if model.features.reactions else None)
         self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
                          if model.features.packed_bed_profiles else None)
+        self.averages = (AverageRecorder(model, _cadence(model.scene, model.t_end)[1],
+                                         loop.get("averages") if loop else None)
+                         if model.features.averaging else None)
 
     def snapshot(self, solver: Solver) -> Path:
         """Write the next snapshot and list it in snapshots.pvd; returns its file."""
@@ -305,6 +309,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                  "output": output_table, "wall_s": wall_before + time.perf_counter() - t0}
         if out.profiles is not None:
             state["profiles"] = out.profiles.state()
+        if out.averages is not None:
+            state["averages"] = out.averages.state()
         if out.reactions is not None:
             state["reaction_rows"] = out.reactions.rows
         checkpoint.save(out.dir, solver, state, model.loaded.raw)
@@ -327,6 +333,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                         on_snapshot(written)
                 if out.profiles is not None and out.profiles.due(solver.t):
                     out.profiles.record(solver)
+                if out.averages is not None and out.averages.due(solver.t):
+                    out.averages.record(solver)
                 if view is not None:
                     view.update(solver)
                 if solver.steps >= total_steps:
@@ -358,6 +366,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         out.series.close()
         if model.angle_bins:
             out.write_alpha_profile(solver)
+        if out.averages is not None:
+            write_averages(out.dir, model, solver)
         bed_profiles = out.write_bed_profiles(solver)
         wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
         series = read_series(out.series.path) if out.series.path.is_file() else {}

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
+from tidem.kernels.averaging import make_averaging_kernel
 from tidem.kernels.broadphase import make_neighbor_builder
 from tidem.kernels.contact_laws import LINEAR
 from tidem.kernels.reactions import make_reaction_kernel
@@ -70,6 +71,11 @@ class Solver:
             self._react = make_reaction_kernel(model.reaction_constants, S, self.gas.gg if G else None, G,
                                                gas.density if gas else 1.0, gas.viscosity if gas else 1.0,
                                                model.wall_slots)
+        self._average = None
+        if f.averaging:
+            a = model.averaging
+            self._average = make_averaging_kernel(model.grid, a.lo, a.cells, a.size, f.n_tubes, a.rings, a.ring_width,
+                                                  a.sectors, f.heat, S)
         self._check_every = model.scene.numerics.check_interval
         self.start()
 
@@ -116,6 +122,10 @@ class Solver:
             if self.gas is not None and self.gas.walls:
                 self.gas.G.wall_energy.fill(0.0)
             self.profile_t0 = self.t
+
+    def sample_averages(self) -> None:
+        """Add the particles now to the time-averaged fields of [averaging] (`tidem.averaging`)."""
+        self._average(self.n)
 
     def rebuild(self) -> None:
         """Neighbour list (none with contact.model = 'none')."""

@@ -34,6 +34,9 @@ particles escaped, escaped mass [kg]); with sublimation rt0 (time first seen [s]
 (time sublimated away [s], minus the time it left through the exit, 0 while present).
 Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax;
 wmask [capacity]: bit s set while surface s holds one of the particle's slots.
+With [averaging] (`kernels/averaging.py`, source 3 eq. 34-36): float64 sums per control volume
+and channel, avg_cells [cells x, cells z, channels] and, with tubes, avg_rings
+[tubes x rings, sectors, channels]; avg_samples (number of samples taken).
 """
 
 from __future__ import annotations
@@ -168,6 +171,15 @@ def allocate(model: Model) -> State:
         if "sublimation" in feat.reactions:
             place((N,), "rt0")
             place((N,), "rt1")
+    if feat.averaging:
+        from tidem.kernels.averaging import channels
+
+        a, C = model.averaging, channels(feat.heat)
+        fb.dense(ti.ijk, (*a.cells, C)).place(make("avg_cells", ti.f64))
+        if model.tubes:
+            fb.dense(ti.ijk, (len(model.tubes) * a.rings, a.sectors, C)).place(make("avg_rings", ti.f64))
+        S.avg_samples = ti.field(ti.i32)
+        fb.place(S.avg_samples)
     place((2,), "overflow", ti.i32)
     place((5,), "sums")
     S._tree = fb.finalize()

@@ -1,6 +1,7 @@
 """Plots of a run (`plots/*.png`): energies, coordination, overlap and the scene's own
-columns against simulated time, the tube alpha profile, the packed-bed profiles, and maps of
-the gas at the last snapshot, drawn with matplotlib (which pyvista brings)."""
+columns against simulated time, the tube alpha profile, the packed-bed profiles, maps of the
+time-averaged bed ([averaging]) and of the gas at the last snapshot, drawn with matplotlib
+(which pyvista brings)."""
 
 from __future__ import annotations
 
@@ -92,6 +93,9 @@ def plot_timeseries(run_dir: Path) -> list[Path]:
     profiles = Path(run_dir) / "preheat_profiles.csv"
     if profiles.exists():
         written.append(plot_bed_profiles(profiles, out_dir / "preheat_profiles.png"))
+    averages = Path(run_dir) / "averages.vti"
+    if averages.exists():
+        written.append(plot_averages(averages, out_dir / "averages.png"))
     gas_files = sorted((Path(run_dir) / "gas").glob("gas_*.vti"))
     if gas_files:
         written.append(plot_gas_maps(gas_files[-1], out_dir / "gas_maps.png"))
@@ -128,6 +132,49 @@ def plot_gas_maps(vti_path: Path, png_path: Path) -> Path:
         ax.set_xlabel("x [m]")
     axes[0][0].set_ylabel("z [m]")
     fig.suptitle(f"Gas, mean over the depth (y), at t = {grid['time']:.4g} s")
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=110)
+    plt.close(fig)
+    return png_path
+
+
+AVERAGE_MAPS = [("packing_fraction", "Packing fraction [-]", "cividis"), ("speed", "Speed [m/s]", "viridis"),
+                ("temperature", "Temperature [K]", "inferno")]
+
+
+def plot_averages(vti_path: Path, png_path: Path) -> Path:
+    """Maps of the time-averaged cells of `averages.vti` over x-z: packing fraction, speed of
+    the number-mean velocity and (with heat) temperature, with the tubes along y of run.json
+    outlined (and their periodic images); cells no particle entered are blank."""
+    import json
+
+    import matplotlib.pyplot as plt
+
+    from tidem.io.vtp import read_vti
+
+    grid, fields = read_vti(vti_path)
+    fields["speed"] = np.linalg.norm(fields["velocity"], axis=-1)
+    cells, origin, spacing = grid["cells"], grid["origin"], grid["spacing"]
+    extent = [origin[0], origin[0] + cells[0] * spacing[0], origin[2], origin[2] + cells[2] * spacing[2]]
+    width = extent[1] - extent[0]
+    summary = Path(vti_path).parent / "run.json"
+    tubes = json.loads(summary.read_text())["render_geometry"]["tubes"] if summary.exists() else []
+    shown = [m for m in AVERAGE_MAPS if m[0] in fields]
+    fig, axes = plt.subplots(1, len(shown), figsize=(4.0 * len(shown), 5.5), squeeze=False)
+    for ax, (key, label, cmap) in zip(axes[0], shown):
+        image = ax.imshow(fields[key][:, 0, :].T, origin="lower", extent=extent, cmap=cmap, aspect="equal")
+        bar = fig.colorbar(image, ax=ax, shrink=0.8)
+        bar.set_label(label)
+        bar.formatter.set_useOffset(False)
+        bar.update_ticks()
+        for tube in (t for t in tubes if t["mask"][1] == 0.0):
+            for shift in (-width, 0.0, width):
+                ax.add_patch(plt.Circle((tube["c"][0] + shift, tube["c"][2]), tube["r"], fill=False, color="w", lw=1))
+        ax.set_xlim(extent[:2])
+        ax.set_ylim(extent[2:])
+        ax.set_xlabel("x [m]")
+    axes[0][0].set_ylabel("z [m]")
+    fig.suptitle(f"Time averages over the depth (y), up to t = {grid['time']:.4g} s")
     fig.tight_layout()
     fig.savefig(png_path, dpi=110)
     plt.close(fig)

@@ -189,6 +189,30 @@ def no_contact_checks(scene: Scene) -> list[str]:
     return errs
 
 
+def averaging_checks(scene: Scene) -> list[str]:
+    """Eq. 36 of source 3 (a particle counts where its centre lies) averages only over control
+    volumes larger than a particle: cells and rings must exceed the largest diameter."""
+    avg = scene.averaging
+    if avg is None:
+        return []
+    from tidem.averaging import cell_grid
+
+    errs: list[str] = []
+    dmax = max_diameter(scene)
+    _, sizes = cell_grid(scene)
+    if min(sizes) <= dmax:
+        errs.append(f"averaging.cell_size: cells of {sizes[0]:g} x {sizes[1]:g} m (x, z; rounded to fit the domain) "
+                    f"are not larger than the largest particle diameter {dmax:g} m, so a cell is no local average "
+                    f"(source 3 eq. 36); use cell_size >= [{2 * dmax:g}, {2 * dmax:g}] (2-3 diameters)")
+    if avg.ring_width is not None and avg.ring_width < dmax:
+        errs.append(f"averaging.ring_width: {avg.ring_width:g} m is less than the largest particle diameter {dmax:g} m "
+                    f"(source 3 eq. 36); use ring_width >= {dmax:g} or leave it out (one diameter)")
+    if not scene.tubes:
+        errs += [f"averaging.{key}: ring sectors are averaged around tubes and the scene has none; remove the key"
+                 for key in ("ring_width", "rings", "ring_sectors") if key in avg.model_fields_set]
+    return errs
+
+
 def cross_checks(scene: Scene) -> list[str]:
     """All problems that a single table cannot see, as 'key.path: message' lines."""
     errs: list[str] = []
@@ -275,6 +299,7 @@ def cross_checks(scene: Scene) -> list[str]:
     errs += profile_checks(scene)
     errs += reaction_checks(scene)
     errs += no_contact_checks(scene)
+    errs += averaging_checks(scene)
 
     dmax = max_diameter(scene)
     lens = 0.5 * scene.heat.fluid_layer if scene.heat is not None else 0.0  # the gas-lens reach (tidem.model)

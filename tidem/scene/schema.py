@@ -350,6 +350,17 @@ class Sublimation(Strict):
 Reaction = Annotated[CharCombustion | Polymerization | Sublimation, Field(discriminator="type")]
 
 
+class Averaging(Strict):
+    """Time-averaged bed fields in cells and in ring sectors around the tubes (source 3 eq. 34-36)."""
+
+    start: NonNegative = 0.0
+    interval: Positive | None = None
+    cell_size: tuple[Positive, Positive] | None = None
+    ring_width: Positive | None = None
+    rings: int = Field(default=3, ge=1, le=100)
+    ring_sectors: int = Field(default=36, ge=4, le=720)
+
+
 class Render(Strict):
     """Frames and movie of a run (`tidem render` can redo them with other settings)."""
 
@@ -388,6 +399,7 @@ class Scene(Strict):
     heat: Heat | None = None
     gas: Gas | None = None
     reactions: list[Reaction] = []
+    averaging: Averaging | None = None
     observables: list[str] = []
 
     @field_validator("observables")
