@@ -157,9 +157,16 @@ def tube_heat(rec: RunRecord) -> dict[str, float]:
 def tube_mean_alpha(rec: RunRecord) -> dict[str, float]:
     """Mean heat-transfer coefficient of each heated tube [W/(m^2 K)] (`tube1_mean_alpha_W_m2K`):
     heat delivered since heat.profile_start / (time x tube area x (T_tube - heat.initial_temperature)),
-    source 3 eq. 34-36 averaged over the whole circumference; for a heated foil the heating per
-    area over the foil's mean excess temperature (`alpha_profile`)."""
-    return {f"tube{row['tube']}_mean_alpha_W_m2K": row["mean_alpha_W_m2K"] for row in rec.alpha_means}
+    source 3 eq. 34-36 averaged over the whole circumference; for a heated foil the mean of the
+    local q_el / (T_foil - T_ref), with `tube1_alpha_of_mean_excess_W_m2K` and
+    `tube1_foil_storage_pct` beside it (`alpha_profile`)."""
+    out = {}
+    for row in rec.alpha_means:
+        out[f"tube{row['tube']}_mean_alpha_W_m2K"] = row["mean_alpha_W_m2K"]
+        for key in ("alpha_of_mean_excess_W_m2K", "foil_storage_pct"):  # heated foils
+            if key in row:
+                out[f"tube{row['tube']}_{key}"] = row[key]
+    return out
 
 
 def _top(rec: RunRecord) -> float:
@@ -363,8 +370,11 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
       the sector of angle omega from the top of the tube;
     * heated foil (source 3 eq. 4, as measured): alpha(omega) = q_el / (T_foil(omega) - T_ref),
       q_el the electric heating per area and T_foil the foil's mean temperature in the sector;
-      the mean alpha is q_el / (circumference mean of T_foil - T_ref), and `foil_storage_pct`
-      is the share of the heating still warming the foil (0 in a steady state).
+      the mean alpha is the circumference mean of alpha(omega), as the experiment averages
+      its local values (for a fixed-temperature tube the two definitions agree);
+      `alpha_of_mean_excess` = q_el / (mean of T_foil - T_ref) gives the tube's heat from its
+      mean temperature, and `foil_storage_pct` is the share of the heating still warming the
+      foil (0 in a steady state).
     With gas-tube convection the mean alpha adds the tube's heat to the gas (gas_alpha) to
     the particles'. Returns (rows of tube, angle_deg, alpha, and the mean alpha per tube)."""
     if not model.angle_bins or solver.profile_t0 is None or solver.t <= solver.profile_t0:
@@ -384,7 +394,8 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
         if tube["flux"] is not None:
             excess = foil_T[k] / span - t_ref
             local = tube["flux"] / excess
-            mean = {"tube": k, "mean_alpha_W_m2K": float(tube["flux"] / excess.mean()), "averaged_over_s": span,
+            mean = {"tube": k, "mean_alpha_W_m2K": float(local.mean()), "averaged_over_s": span,
+                    "alpha_of_mean_excess_W_m2K": float(tube["flux"] / excess.mean()),
                     "foil_storage_pct": float(100 * (1 - energy[k].sum() / (tube["flux"] * area * bins * span)))}
         else:
             dT = tube["T"] - t_ref

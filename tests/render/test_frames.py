@@ -66,7 +66,8 @@ def test_powder_finer_than_a_pixel_is_drawn_and_labels_are_whole_kelvin(tmp_path
         dark.append(int((img.sum(axis=2) < 700).sum()))
     assert dark[0] - dark[1] >= 9
     assert bar_format((300.0, 9000.0)) == "%.0f" and bar_format((298.0, 500.0)) == "%.0f"
-    assert bar_format((0.0, 0.04)) == "%.3g"
+    assert bar_format((0.0, 0.04)) == "%.2f" and bar_format((293.15, 295.0)) == "%.1f"
+    assert bar_format((0.0, 2e-5)) == "%.3g"
 
 
 def test_scene_run_writes_frames_and_movie(tmp_path):

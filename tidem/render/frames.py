@@ -11,6 +11,7 @@ outline, and the simulated time as a stamp.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field as dc_field
 from pathlib import Path
@@ -78,9 +79,14 @@ def bar_labels(clim: tuple[float, float]) -> int:
 
 
 def bar_format(clim: tuple[float, float]) -> str:
-    """Colour-bar label format: whole numbers for ranges of 5 units or more above 100
-    (298 ... 500 K, 300 ... 9000 K), three significant digits otherwise (0 ... 0.04 m/s)."""
-    return "%.0f" if max(abs(clim[0]), abs(clim[1])) >= 100 and clim[1] - clim[0] >= 5 else "%.3g"
+    """Colour-bar label format: as many decimals as tell neighbouring labels apart (298 ... 500 K,
+    293.2, 293.6 ... 295.0 K, 0.00 ... 0.04 m/s); three significant digits for magnitudes below
+    1e-3 or from 1e5 on."""
+    top = max(abs(clim[0]), abs(clim[1]))
+    step = (clim[1] - clim[0]) / max(bar_labels(clim) - 1, 1)
+    if top < 1e-3 or top >= 1e5 or step <= 0:
+        return "%.3g"
+    return f"%.{max(0, -math.floor(math.log10(step)))}f"
 
 
 def view_extent(view: str, bounds) -> tuple[float, float]:
