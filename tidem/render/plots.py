@@ -106,6 +106,17 @@ GAS_MAPS = [("temperature", "Gas temperature [K]", "inferno"), ("o2_mole_fractio
             ("voidage", "Voidage [-]", "cividis"), ("speed", "Gas speed [m/s]", "viridis")]
 
 
+def depth_map(fig, ax, values, extent, cmap: str, label: str) -> None:
+    """One x-z map (values indexed [x, z]) with its colour bar in plain units (1123.05 K, not
+    0.05 + 1.123e3) and the x axis labelled."""
+    image = ax.imshow(values.T, origin="lower", extent=extent, cmap=cmap, aspect="equal")
+    bar = fig.colorbar(image, ax=ax, shrink=0.8)
+    bar.set_label(label)
+    bar.formatter.set_useOffset(False)
+    bar.update_ticks()
+    ax.set_xlabel("x [m]")
+
+
 def plot_gas_maps(vti_path: Path, png_path: Path) -> Path:
     """Maps of the gas at one snapshot, averaged over the depth (y): temperature and O2 where
     the run has them, voidage and speed; tube cells blank."""
@@ -124,12 +135,7 @@ def plot_gas_maps(vti_path: Path, png_path: Path) -> Path:
         total = np.where(fluid, fields[key], 0.0).sum(axis=1)
         count = fluid.sum(axis=1)
         mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
-        image = ax.imshow(mean.T, origin="lower", extent=extent, cmap=cmap, aspect="equal")
-        bar = fig.colorbar(image, ax=ax, shrink=0.8)
-        bar.set_label(label)
-        bar.formatter.set_useOffset(False)  # 1123.05 K, not 0.05 + 1.123e3
-        bar.update_ticks()
-        ax.set_xlabel("x [m]")
+        depth_map(fig, ax, mean, extent, cmap, label)
     axes[0][0].set_ylabel("z [m]")
     fig.suptitle(f"Gas, mean over the depth (y), at t = {grid['time']:.4g} s")
     fig.tight_layout()
@@ -162,17 +168,12 @@ def plot_averages(vti_path: Path, png_path: Path) -> Path:
     shown = [m for m in AVERAGE_MAPS if m[0] in fields]
     fig, axes = plt.subplots(1, len(shown), figsize=(4.0 * len(shown), 5.5), squeeze=False)
     for ax, (key, label, cmap) in zip(axes[0], shown):
-        image = ax.imshow(fields[key][:, 0, :].T, origin="lower", extent=extent, cmap=cmap, aspect="equal")
-        bar = fig.colorbar(image, ax=ax, shrink=0.8)
-        bar.set_label(label)
-        bar.formatter.set_useOffset(False)
-        bar.update_ticks()
+        depth_map(fig, ax, fields[key][:, 0, :], extent, cmap, label)
         for tube in (t for t in tubes if t["mask"][1] == 0.0):
             for shift in (-width, 0.0, width):
                 ax.add_patch(plt.Circle((tube["c"][0] + shift, tube["c"][2]), tube["r"], fill=False, color="w", lw=1))
         ax.set_xlim(extent[:2])
         ax.set_ylim(extent[2:])
-        ax.set_xlabel("x [m]")
     axes[0][0].set_ylabel("z [m]")
     fig.suptitle(f"Time averages over the depth (y), up to t = {grid['time']:.4g} s")
     fig.tight_layout()
