@@ -1,10 +1,19 @@
-"""One Taichi initialisation (CPU, float64) for the whole test session, and scene helpers."""
+"""One Taichi initialisation (CPU, float64) per test process, and scene helpers.
+
+The suite compiles the kernels of many small scenes once each, so it compiles them without
+Taichi's IR optimization (`TIDEM_COMPILE=fast`, see `tidem/runtime.py`): a third of the compile
+time for the same kernels. README's test command runs two pytest-xdist
+workers, because compiling is single-threaded.
+"""
 
 import copy
+import os
 
 import pytest
 
-from tidem.runtime import ensure_taichi
+os.environ.setdefault("TIDEM_COMPILE", "fast")
+
+from tidem.runtime import ensure_taichi  # noqa: E402  (after TIDEM_COMPILE is set)
 
 ensure_taichi("cpu", "float64")
 

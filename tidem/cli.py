@@ -69,6 +69,8 @@ def scene(
         ensure_taichi(arch, loaded.scene.numerics.precision)
     except BackendUnavailable as exc:
         _fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
+    except ValueError as exc:  # TIDEM_COMPILE
+        _fail(str(exc), 2)
     model = _model(loaded, smoke=smoke, t_end=t_end)
     from tidem.run import run
 

@@ -21,6 +21,7 @@ from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET, SERIAL_CELLS, make_flow_kernels
 from tidem.kernels.gas_grid import GasGrid
 from tidem.kernels.species import make_species_kernel
+from tidem.runtime import hot
 
 MAX_COURANT = 0.5
 
@@ -272,6 +273,7 @@ class GasPhase:
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
             model.dt if self.sources else 0.0, self.t_in)
+        self.add_forces = hot(self.add_forces)  # every DEM step, every particle
         if self.species:
             from tidem.reactions import o2_mass_fraction
 

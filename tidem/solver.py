@@ -24,6 +24,7 @@ from tidem.kernels.outlet import make_recycle_kernel
 from tidem.gas import GasError, GasPhase
 from tidem.model import Model, is_heated
 from tidem.pour import Pourer
+from tidem.runtime import hot
 from tidem.state import State, allocate
 
 
@@ -46,14 +47,15 @@ class Solver:
         self.rebuilds = 0
         self._rebuild = None
         if f.contacts:
-            self._rebuild = make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
-                                                  f.rolling, f.hysteretic, S, f.growth)
-        self._forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes,
-                                         f.n_tubes, model.wall_slots, model.gravity, S, f.contact_time,
-                                         model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
-                                         f.contacts, f.radiation, f.foil, f.wall_foil)
-        self._kick_drift, self._kick = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
-                                                        model.angle_bins, f.foil, f.growth, f.wall_foil, f.n_planes)
+            self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
+                                                      f.rolling, f.hysteretic, S, f.growth))
+        self._forces = hot(make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes,
+                                             f.n_tubes, model.wall_slots, model.gravity, S, f.contact_time,
+                                             model.pair_params.shape[0] == 1, f.heat, model.angle_bins,
+                                             model.fluid_layer, f.contacts, f.radiation, f.foil, f.wall_foil))
+        self._kick_drift, self._kick = map(hot, make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
+                                                                 model.angle_bins, f.foil, f.growth, f.wall_foil,
+                                                                 f.n_planes))
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, S)
         self._recycle = None

@@ -1,0 +1,34 @@
+"""The compile policy of `tidem.runtime`: TIDEM_COMPILE and the `hot` kernels."""
+
+import taichi as ti
+from typer.testing import CliRunner
+
+from tidem.cli import app
+from tidem.runtime import hot
+
+
+def test_hot_kernel_compiles_with_ir_optimization_and_the_rest_without(monkeypatch):
+    monkeypatch.setenv("TIDEM_COMPILE", "auto")
+    cfg = ti.lang.impl.current_cfg()
+    monkeypatch.setattr(cfg, "advanced_optimization", False)
+    seen = []
+    kernel = hot(lambda n: seen.append(ti.lang.impl.current_cfg().advanced_optimization))
+    kernel(1)
+    kernel(2)
+    assert seen == [True, False]  # only the first call compiles
+    assert cfg.advanced_optimization is False
+
+
+def test_hot_is_a_no_op_in_fast_mode(monkeypatch):
+    monkeypatch.setenv("TIDEM_COMPILE", "fast")
+    def plain(n):
+        return n
+    assert hot(plain) is plain
+
+
+def test_unknown_compile_mode_is_a_clear_error(monkeypatch):
+    monkeypatch.setenv("TIDEM_COMPILE", "fastest")
+    result = CliRunner().invoke(app, ["scene", "sphere_impact", "--smoke", "--no-render", "--quiet"])
+    assert result.exit_code == 2
+    assert "TIDEM_COMPILE='fastest': use one of auto, full, fast" in result.output
+    assert "Traceback" not in result.output
