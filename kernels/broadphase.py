@@ -12,6 +12,11 @@ Algorithm (O(N) per rebuild):
    merge, and the history is moved in place: entries moving right are moved first in
    descending order, then entries moving left in ascending order, then new slots are zeroed.
 
+4. for every entry (i, k) with partner j > i, find the slot of i in j's row by binary search
+   and keep it in `src[i, k]` (the mirror slot; -1 otherwise). The contact kernel evaluates a
+   pair once, in the lower index's row, and hands the force to the partner through it
+   (`kernels/contact.py`); `src` is scratch of step 3 until then.
+
 A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
 error that names the setting to raise (never a silent drop).
 """
@@ -22,7 +27,8 @@ from .geometry import make_geometry
 
 
 def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False):
-    """Return `rebuild()` that refreshes `S.nbr`, `S.nbr_n` and moves the contact history.
+    """Return `rebuild()` that refreshes `S.nbr`, `S.nbr_n`, moves the contact history and finds
+    the mirror slots `S.src`.
 
     S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
     grow) each row also records the particle's radius at the build, `S.r_build`.
@@ -136,10 +142,32 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             if ti.static(growth):
                 S.r_build[i] = S.radius[i]
 
+    @ti.kernel
+    def mirror_rows(n: ti.i32):
+        for i in range(n):
+            for k in range(S.nbr_n[i]):
+                j = S.nbr[i, k]
+                found = -1
+                if j > i:
+                    lo = 0
+                    hi = S.nbr_n[j] - 1
+                    while lo <= hi:
+                        mid = (lo + hi) // 2
+                        partner = S.nbr[j, mid]
+                        if partner == i:
+                            found = mid
+                            lo = hi + 1
+                        elif partner < i:
+                            lo = mid + 1
+                        else:
+                            hi = mid - 1
+                S.src[i, k] = found
+
     def rebuild(n: int) -> None:
         count_cells(n)
         prefix_sum()
         scatter(n)
         build_rows(n)
+        mirror_rows(n)
 
     return rebuild

@@ -12,6 +12,7 @@ import os
 import pytest
 
 os.environ.setdefault("TIDEM_COMPILE", "fast")
+os.environ.setdefault("TI_ENABLE_PYBUF", "0")  # pytest's captured stdout would make Taichi print after every launch
 
 from tidem.runtime import ensure_taichi  # noqa: E402  (after TIDEM_COMPILE is set)
 
