@@ -11,8 +11,10 @@ per particle and no atomic sums (so runs are bit-reproducible whatever the threa
 2. `partner_forces`: for each listed partner j < i inside contact range, i reads its own slot:
    force -F, torque -r_i n x F - M (n the unit normal from i to j; Newton's third law for the
    force, and the contact point r_i n on i's side).
-Heat conduction, the overlap check and the contact count are computed in both passes, each
-for its own side of the row. Against the full list evaluated twice (one law per listed pair
+With heat, own_forces also evaluates each pair's conduction (contact spot and gas lens) once
+and writes minus the heat flow into i to `qpair[j, mirror]`, which partner_forces adds for
+every partner j < i. The overlap check and the contact count are computed in both passes,
+each for its own side of the row. Against the full list evaluated twice (one law per listed pair
 and side) this makes the force step 1.3x faster on the peer benchmark bed.
 
 Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is
@@ -229,7 +231,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             if ti.static(rolling):
                                 S.mr[j, mirror] = m_roll
                         if ti.static(heat):
-                            heat_in += touching_heat(i, j, mat_i, p_same, r_eff, delta, rj)
+                            flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, rj)
+                            heat_in += flow
+                            if mirror >= 0:
+                                S.qpair[j, mirror] = -flow
                         if ti.static(rolling):
                             S.mr[i, k] = mr_new
                         if ti.static(hysteretic):
@@ -237,8 +242,14 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         worst = ti.max(worst, delta / ti.min(ri, rj))
                         touching += 1
                     else:
-                        if ti.static(pfp):
-                            heat_in += lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
+                        if ti.static(heat):
+                            flow = 0.0
+                            if ti.static(pfp):
+                                flow = lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
+                            heat_in += flow
+                            mirror = S.src[i, k]
+                            if mirror >= 0:
+                                S.qpair[j, mirror] = -flow
                         S.ft[i, k] = zero3
                         if ti.static(rolling):
                             S.mr[i, k] = zero3
@@ -322,8 +333,6 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             if S.active[i]:
                 xi = S.x[i]
                 ri = S.radius[i]
-                mat_i = S.mat[i]
-                p_same = S.pp[0, 0]
                 force = zero3
                 torque = zero3
                 heat_in = 0.0
@@ -333,6 +342,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     j = S.nbr[i, k]
                     if j > i:
                         continue  # done in own_forces
+                    if ti.static(heat):
+                        heat_in += S.qpair[i, k]  # written by j in own_forces
                     d, rj, rsum, dist2 = separation(xi, ri, j)
                     if dist2 < rsum * rsum:
                         nrm, dist = unit_normal(d, dist2, rsum)
@@ -342,12 +353,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         torque -= (ri * nrm).cross(f_j)
                         if ti.static(rolling):
                             torque -= S.mr[i, k]
-                        if ti.static(heat):
-                            heat_in += touching_heat(i, j, mat_i, p_same, ri * rj / rsum, delta, rj)
                         worst = ti.max(worst, delta / ti.min(ri, rj))
                         touching += 1
-                    elif ti.static(pfp):
-                        heat_in += lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
                 S.f[i] += force
                 S.tq[i] += torque
                 if ti.static(heat):

@@ -148,7 +148,7 @@ class Model:
         if self.features.hysteretic:
             per += fp * (k + w)
         if self.features.heat:
-            per += 3 * fp
+            per += 3 * fp + (k * fp if self.features.contacts else 0)  # T, q, 1/(m c); qpair
         if self.features.gas:
             per += fp * (8 + (2 if self.features.heat else 0) + self.features.species)
         if self.features.reactions:

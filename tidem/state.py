@@ -14,7 +14,9 @@ Per-particle fields, shape [capacity]:
   ncontact         number of contacts
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
-With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
+With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
+[capacity, K] (heat rate into the particle from that neighbour, written by the lower-index
+particle of the pair, read by the higher one; see kernels/contact.py); per
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
 into the bed [W]) and surf_energy (its time integral [J]); with angle bins around heated tubes
 tube_bin_rate / tube_bin_energy (the same by angle bin) and tube_side (the horizontal unit
@@ -137,6 +139,8 @@ def allocate(model: Model) -> State:
     if feat.heat:
         for name in ("T", "q", "inv_heat_cap"):
             place((N,), name)
+        if feat.contacts:
+            place((N, K), "qpair")
         NS = max(len(model.planes) + len(model.tubes), 1)
         place((NS,), "surf_T")
         place((NS,), "surf_rate")
