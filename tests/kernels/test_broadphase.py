@@ -1,5 +1,5 @@
-"""Broad phase against brute force (periodic and walled, polydisperse), and contact history
-carried across neighbour rebuilds."""
+"""Broad phase against brute force (periodic and walled, polydisperse), the mirror slots of the
+rows, and contact history carried across neighbour rebuilds."""
 
 import numpy as np
 import pytest
@@ -60,6 +60,12 @@ def test_neighbour_list_matches_brute_force(solver_for, periodic):
     # rows are sorted by partner index
     nbr, cnt = S.nbr.to_numpy(), S.nbr_n.to_numpy()
     assert all(np.all(np.diff(nbr[i, : cnt[i]]) > 0) for i in range(n))
+    # each entry (i, k) with partner j > i knows the slot of i in j's row (the mirror slot)
+    mirror = S.src.to_numpy()
+    for i in range(n):
+        for k in range(cnt[i]):
+            j = nbr[i, k]
+            assert (nbr[j, mirror[i, k]] == i) if j > i else (mirror[i, k] == -1)
 
 
 def test_history_follows_partner_across_rebuild(solver_for):

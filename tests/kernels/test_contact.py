@@ -135,3 +135,38 @@ def test_energy_conserved_elastic_frictionless(solver_for):
                 collisions += 1
     assert collisions > 20, "the test must include collisions"
     assert worst < 0.005
+
+
+@pytest.mark.parametrize("moving_first", [True, False])
+def test_oblique_impact_conserves_momentum_and_spins_both_spheres_alike(solver_for, moving_first):
+    """Each contact is evaluated by its lower-index sphere and handed to the other (mirror slot):
+    whichever sphere owns the pair, an oblique frictional impact of equal spheres, one at rest,
+    leaves total momentum unchanged and gives both spheres the same spin, r n x J_t (Newton's
+    third law for the tangential impulse at the shared contact point)."""
+    r = 0.005
+    x = [[-2.0 * r, 0.0, 0.0], [0.0, 0.6 * r, 0.0]]  # offset along y: an oblique hit
+    v = [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    if not moving_first:
+        x, v = x[::-1], v[::-1]
+    raw = make_scene(
+        materials={"steel": {"density": 7800.0, "youngs_modulus": 2e9, "poisson_ratio": 0.3, "restitution": 0.8,
+                             "friction": 0.4}},
+        particles=[{"name": "p", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * r},
+                    "positions": x, "velocities": v}],
+        numerics={"dt_fraction": 0.05, "t_end": 1.0},
+    )
+    s = solver_for(raw)
+    S = s.state
+    p0 = S.v.to_numpy().sum(axis=0)
+    touched = False
+    for _ in range(20000):
+        s.step()
+        apart = np.linalg.norm(S.x[1].to_numpy() - S.x[0].to_numpy()) > 2 * r
+        touched |= not apart
+        if touched and apart:
+            break
+    assert touched and apart
+    w = S.w.to_numpy()
+    assert abs(w[0, 2]) > 1.0  # rad/s: friction spun them about z
+    np.testing.assert_allclose(w[1], w[0], rtol=1e-9, atol=1e-9 * abs(w[0, 2]))
+    np.testing.assert_allclose(S.v.to_numpy().sum(axis=0), p0, atol=1e-12)
