@@ -230,7 +230,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             S.ft[j, mirror] = f
                             if ti.static(rolling):
                                 S.mr[j, mirror] = m_roll
-                        if ti.static(heat):
+                        if ti.static(heat and pairs):  # (qpair exists only with contacts)
                             flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, rj)
                             heat_in += flow
                             if mirror >= 0:
@@ -242,7 +242,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         worst = ti.max(worst, delta / ti.min(ri, rj))
                         touching += 1
                     else:
-                        if ti.static(heat):
+                        if ti.static(heat and pairs):
                             flow = 0.0
                             if ti.static(pfp):
                                 flow = lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
