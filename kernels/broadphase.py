@@ -156,7 +156,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         partner = S.nbr[j, mid]
                         if partner == i:
                             found = mid
-                            lo = hi + 1
+                            break
                         elif partner < i:
                             lo = mid + 1
                         else:

@@ -85,12 +85,12 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         return p
 
     @ti.func
-    def touching_heat(i, j, mat_i, p_same, r_eff, delta, rj):
+    def touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj):
         """Heat flow into i from a touching partner j: contact spot, plus the gas lens."""
         p_pair = pair_params(mat_i, j, p_same)
         h_pair = spot_conductance(p_pair, r_eff, delta)
         if ti.static(pfp):
-            h_pair += pfp_conductance(p_pair, r_eff, -delta, fluid_layer * ti.min(S.radius[i], rj))
+            h_pair += pfp_conductance(p_pair, r_eff, -delta, fluid_layer * ti.min(ri, rj))
         return h_pair * (S.T[j] - S.T[i])
 
     @ti.func
@@ -193,68 +193,65 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 touching = 0
                 heat_in = 0.0
                 p_same = S.pp[0, 0]
-                n_pairs = S.nbr_n[i]
-                if ti.static(not pairs):
-                    n_pairs = 0
-                for k in range(n_pairs):
-                    j = S.nbr[i, k]
-                    if j < i:
-                        continue  # evaluated by j; partner_forces adds it to i
-                    d, rj, rsum, dist2 = separation(xi, ri, j)
-                    if dist2 < rsum * rsum:
-                        nrm, dist = unit_normal(d, dist2, rsum)
-                        delta = rsum - dist
-                        v_rel = vi - S.v[j] + (ri * wi + rj * S.w[j]).cross(nrm)
-                        mj = S.mass[j]
-                        m_eff = mi * mj / (mi + mj)
-                        r_eff = ri * rj / rsum
-                        i_roll = 0.0
-                        if ti.static(rolling):
-                            ai = 1.4 * mi * ri * ri
-                            aj = 1.4 * mj * rj * rj
-                            i_roll = ai * aj / (ai + aj)
-                        dmax = 0.0
-                        if ti.static(hysteretic):
-                            dmax = S.dmax[i, k]
-                        mr = zero3
-                        if ti.static(rolling):
-                            mr = S.mr[i, k]
-                        f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                            nrm, delta, v_rel, wi - S.w[j], m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
-                            p_same if ti.static(single_material) else S.pp[mat_i, S.mat[j]], S.ft[i, k], mr, dmax, dt)
-                        force += f
-                        torque += (ri * nrm).cross(f_t) + m_roll
-                        S.ft[i, k] = xi_new
-                        mirror = S.src[i, k]
-                        if mirror >= 0:  # -1 only in a row cut by overflow, which stops the run
-                            S.ft[j, mirror] = f
+                if ti.static(pairs):  # contact.model = 'none' compiles no pair loop
+                    for k in range(S.nbr_n[i]):
+                        j = S.nbr[i, k]
+                        if j < i:
+                            continue  # evaluated by j; partner_forces adds it to i
+                        mirror = S.src[i, k]  # -1 only in a row cut by overflow, which stops the run
+                        d, rj, rsum, dist2 = separation(xi, ri, j)
+                        if dist2 < rsum * rsum:
+                            nrm, dist = unit_normal(d, dist2, rsum)
+                            delta = rsum - dist
+                            v_rel = vi - S.v[j] + (ri * wi + rj * S.w[j]).cross(nrm)
+                            mj = S.mass[j]
+                            m_eff = mi * mj / (mi + mj)
+                            r_eff = ri * rj / rsum
+                            i_roll = 0.0
                             if ti.static(rolling):
-                                S.mr[j, mirror] = m_roll
-                        if ti.static(heat and pairs):  # (qpair exists only with contacts)
-                            flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, rj)
-                            heat_in += flow
+                                ai = 1.4 * mi * ri * ri
+                                aj = 1.4 * mj * rj * rj
+                                i_roll = ai * aj / (ai + aj)
+                            dmax = 0.0
+                            if ti.static(hysteretic):
+                                dmax = S.dmax[i, k]
+                            mr = zero3
+                            if ti.static(rolling):
+                                mr = S.mr[i, k]
+                            f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                                nrm, delta, v_rel, wi - S.w[j], m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
+                                pair_params(mat_i, j, p_same), S.ft[i, k], mr, dmax, dt)
+                            force += f
+                            torque += (ri * nrm).cross(f_t) + m_roll
+                            S.ft[i, k] = xi_new
                             if mirror >= 0:
-                                S.qpair[j, mirror] = -flow
-                        if ti.static(rolling):
-                            S.mr[i, k] = mr_new
-                        if ti.static(hysteretic):
-                            S.dmax[i, k] = dmax_new
-                        worst = ti.max(worst, delta / ti.min(ri, rj))
-                        touching += 1
-                    else:
-                        if ti.static(heat and pairs):
-                            flow = 0.0
-                            if ti.static(pfp):
-                                flow = lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
-                            heat_in += flow
-                            mirror = S.src[i, k]
-                            if mirror >= 0:
-                                S.qpair[j, mirror] = -flow
-                        S.ft[i, k] = zero3
-                        if ti.static(rolling):
-                            S.mr[i, k] = zero3
-                        if ti.static(hysteretic):
-                            S.dmax[i, k] = 0.0
+                                S.ft[j, mirror] = f
+                                if ti.static(rolling):
+                                    S.mr[j, mirror] = m_roll
+                            if ti.static(heat):
+                                flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj)
+                                heat_in += flow
+                                if mirror >= 0:
+                                    S.qpair[j, mirror] = -flow
+                            if ti.static(rolling):
+                                S.mr[i, k] = mr_new
+                            if ti.static(hysteretic):
+                                S.dmax[i, k] = dmax_new
+                            worst = ti.max(worst, delta / ti.min(ri, rj))
+                            touching += 1
+                        else:
+                            if ti.static(heat):
+                                flow = 0.0
+                                if ti.static(pfp):
+                                    flow = lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
+                                heat_in += flow
+                                if mirror >= 0:
+                                    S.qpair[j, mirror] = -flow
+                            S.ft[i, k] = zero3
+                            if ti.static(rolling):
+                                S.mr[i, k] = zero3
+                            if ti.static(hysteretic):
+                                S.dmax[i, k] = 0.0
                 held = S.wmask[i]  # bit s set: surface s has a history slot
                 for s in ti.static(range(n_surf)):
                     delta, nrm, u = surface_contact(i, s, t)

@@ -9,9 +9,9 @@ the time to compile a kernel and makes few kernels faster. `TIDEM_COMPILE` choos
 `auto` (the default) compiles the kernels that run every step on every particle (forces,
 integration, the neighbour build; `hot`) with it and every other kernel without it; `full`
 optimizes every kernel; `fast` none (the test suite, which compiles many small scenes once
-each). Measured on 2 cores: the fluidized-bed smoke run's kernel build 48 s with `full`, 13 s
-with `fast`, and no measurable difference in its steps/s; the peer benchmark bed's force
-kernel 10 % slower without it.
+each). Measured on 2 cores: the fluidized-bed scene's cold kernel build 49 s with `full`, 17 s
+with `auto`, 14 s with `fast`, and no measurable difference in its steps/s; the peer
+benchmark bed's force kernel 10 % slower without it.
 """
 
 from __future__ import annotations
