@@ -28,6 +28,8 @@ overlap of particle i relative to the smaller radius of the pair, `ncontact[i]` 
 contacts (coordination number).
 """
 
+from types import SimpleNamespace
+
 import taichi as ti
 
 from .contact_laws import make_contact_response
@@ -39,7 +41,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False):
-    """Return `compute_forces(n, t, dt)`; `single_material` loads the pair parameters once per
+    """Return a namespace of the two passes: kernels `own(n, t, dt)` and `partner(n, t)` (None
+    without pairs), and `gather(i, t)`, the partner pass for one particle as a Taichi func (for
+    a kernel that fuses it with the rest of the step, `kernels/integrate.py`); `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
     the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
     with `angle_bins` the heat flow from each tube by angle omega of the contact point from the
@@ -324,45 +328,46 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 if ti.static(not pairs):
                     note_contact_time(i, touching, t)
 
+    @ti.func
+    def gather_partners(i, t):
+        """Add to particle i what its partners j < i handed over in own_forces (body of partner_forces)."""
+        xi = S.x[i]
+        ri = S.radius[i]
+        force = zero3
+        torque = zero3
+        heat_in = 0.0
+        worst = S.ovl[i]
+        touching = S.ncontact[i]
+        if ti.static(pairs):
+            for k in range(S.nbr_n[i]):
+                j = S.nbr[i, k]
+                if j > i:
+                    continue  # done in own_forces
+                if ti.static(heat):
+                    heat_in += S.qpair[i, k]  # written by j in own_forces
+                d, rj, rsum, dist2 = separation(xi, ri, j)
+                if dist2 < rsum * rsum:
+                    nrm, dist = unit_normal(d, dist2, rsum)
+                    delta = rsum - dist
+                    f_j = S.ft[i, k]  # force on j, written by j in own_forces
+                    force -= f_j
+                    torque -= (ri * nrm).cross(f_j)
+                    if ti.static(rolling):
+                        torque -= S.mr[i, k]
+                    worst = ti.max(worst, delta / ti.min(ri, rj))
+                    touching += 1
+            S.f[i] += force
+            S.tq[i] += torque
+            if ti.static(heat):
+                S.q[i] += heat_in
+            S.ovl[i] = worst
+            S.ncontact[i] = touching
+            note_contact_time(i, touching, t)
+
     @ti.kernel
     def partner_forces(n: ti.i32, t: float):
         for i in range(n):
             if S.active[i]:
-                xi = S.x[i]
-                ri = S.radius[i]
-                force = zero3
-                torque = zero3
-                heat_in = 0.0
-                worst = S.ovl[i]
-                touching = S.ncontact[i]
-                for k in range(S.nbr_n[i]):
-                    j = S.nbr[i, k]
-                    if j > i:
-                        continue  # done in own_forces
-                    if ti.static(heat):
-                        heat_in += S.qpair[i, k]  # written by j in own_forces
-                    d, rj, rsum, dist2 = separation(xi, ri, j)
-                    if dist2 < rsum * rsum:
-                        nrm, dist = unit_normal(d, dist2, rsum)
-                        delta = rsum - dist
-                        f_j = S.ft[i, k]  # force on j, written by j in own_forces
-                        force -= f_j
-                        torque -= (ri * nrm).cross(f_j)
-                        if ti.static(rolling):
-                            torque -= S.mr[i, k]
-                        worst = ti.max(worst, delta / ti.min(ri, rj))
-                        touching += 1
-                S.f[i] += force
-                S.tq[i] += torque
-                if ti.static(heat):
-                    S.q[i] += heat_in
-                S.ovl[i] = worst
-                S.ncontact[i] = touching
-                note_contact_time(i, touching, t)
+                gather_partners(i, t)
 
-    def compute_forces(n: int, t: float, dt: float) -> None:
-        own_forces(n, t, dt)
-        if pairs:
-            partner_forces(n, t)
-
-    return compute_forces
+    return SimpleNamespace(own=own_forces, partner=partner_forces if pairs else None, gather=gather_partners)

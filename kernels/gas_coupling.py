@@ -34,7 +34,8 @@ from .gas_grid import make_cic
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
                           species: bool = False, tracer_dt: float = 0.0, t_in: float = 0.0):
-    """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n)) for particles S and gas G;
+    """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
+    particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
     `tracer_dt` (the DEM step, scenes with reactions) a reacting particle's drag coefficient is
     capped at m / (2 dt): one that shrank below the drag relaxation limit follows the gas
@@ -172,12 +173,17 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 if ti.static(species):
                     S.gY[i] = sample_cells(G.Y, x)
 
+    @ti.func
+    def gas_force(i, t):
+        """Drag, pressure-gradient force and gas heat exchange of particle i (t unused)."""
+        S.f[i] += S.gK[i] * (S.gu[i] - S.v[i]) - volume(i) * S.ggp[i]
+        if ti.static(heat):
+            S.q[i] += S.gH[i] * (S.gT[i] - S.T[i])
+
     @ti.kernel
     def add_gas_forces(n: ti.i32):
         for i in range(n):
             if S.active[i]:
-                S.f[i] += S.gK[i] * (S.gu[i] - S.v[i]) - volume(i) * S.ggp[i]
-                if ti.static(heat):
-                    S.q[i] += S.gH[i] * (S.gT[i] - S.T[i])
+                gas_force(i, 0.0)
 
-    return deposit_volume, couple, sample, add_gas_forces
+    return deposit_volume, couple, sample, add_gas_forces, gas_force

@@ -16,9 +16,12 @@ from .geometry import make_geometry
 
 
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
-                     growth: bool = False, wall_foil: bool = False, n_planes: int = 0):
-    """Return (kick_drift(n, dt), kick(n, dt)); with heat, `kick` also advances temperatures
+                     growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=()):
+    """Return (kick_drift(n, dt), kick(n, t, dt)); with heat, `kick` also advances temperatures
     explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s.
+    `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
+    (the partner pass of the contact forces, the gas forces); `kick` calls them on each particle
+    first, which saves a kernel launch and a pass over the particles per step.
 
     With `foil`, each heated-foil tube k (tube_foil[k] = (q_el, C_A, A_bin, G / ds^2), q_el > 0)
     advances its foil temperature per angle bin b with the same flows the particles received:
@@ -46,7 +49,7 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                 ti.atomic_max(S.max_disp[None], moved)
 
     @ti.kernel
-    def kick(n: ti.i32, dt: float):
+    def kick(n: ti.i32, t: float, dt: float):
         if ti.static(heat):
             for s in range(n_surf):
                 S.surf_energy[s] += dt * S.surf_rate[s]
@@ -71,6 +74,8 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                     S.plane_foil_T[s] += dt / foil_s[1] * (foil_s[0] - S.surf_rate[s] / foil_s[2])
         for i in range(n):
             if S.active[i]:
+                for finish in ti.static(before_kick):
+                    finish(i, t)
                 S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]
                 S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
                 if ti.static(heat):

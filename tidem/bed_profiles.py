@@ -24,6 +24,7 @@ import numpy as np
 from tidem.analytic.kruczek import explicit_profiles
 from tidem.analytic.packed_bed import PackedBed
 from tidem.analytic.schumann import solid_temperature
+from tidem.storage_order import scene_order
 
 CSV_NAME = "preheat_profiles.csv"
 
@@ -58,7 +59,7 @@ class ProfileRecorder:
         return k < len(self.times) and t >= self.times[k] - 1e-9 * self.model.t_end
 
     def record(self, solver) -> None:
-        self.records.append((solver.t, solver.state.T.to_numpy().copy()))
+        self.records.append((solver.t, scene_order(solver.state, solver.state.T.to_numpy())))
 
 
 def reference_bed(model, solver) -> tuple[PackedBed, float, float]:

@@ -7,6 +7,9 @@ code's settings: Hertz-Mindlin with tangential history, d = 1 mm, rho = 2600 kg/
 E = 1e7 Pa, nu = 0.3, e = 0.5, mu = 0.5, dt = 1e-6 s, skin 0.1 d, periodic in x and y.
 Particles are stored in cell order (as LAMMPS' atom sorting does). Each case runs in its own process (own Taichi precision and thread count): 300 warm-up
 steps, then the timed steps; peak resident memory of that process is reported too.
+
+`profile_scene` (`tidem bench --profile SCENE`) times the steps of any scene by phase
+(`tidem.phases`), after warm-up steps that compile every kernel, with no output written.
 """
 
 from __future__ import annotations
@@ -123,3 +126,33 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
     if out is not None:
         Path(out).write_text(json.dumps(rows, indent=2))
     return rows
+
+
+def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dict, dict] | None = None) -> dict:
+    """Run `warmup` steps of a loaded scene (from a checkpoint `resume`, `tidem.checkpoint.load`,
+    if given), then `steps` timed steps by phase; returns {scene, particles, steps, wall_s,
+    particle_steps_per_s, profile}. Taichi must be initialised."""
+    import taichi as ti
+
+    from tidem import checkpoint
+    from tidem.model import build_model
+    from tidem.solver import Solver
+
+    model = model or build_model(loaded)
+    solver = Solver(model)
+    if resume is not None:
+        checkpoint.restore(solver, *resume)
+    solver.timer.sync = ti.lang.impl.current_cfg().arch != ti.cpu
+    for _ in range(warmup):
+        solver.step()
+    ti.sync()
+    solver.timer.reset()
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        solver.step()
+    ti.sync()
+    wall = time.perf_counter() - t0
+    n = int(solver.state.active.to_numpy().sum())
+    solver.release()
+    return {"scene": model.name, "particles": n, "steps": steps, "wall_s": wall,
+            "particle_steps_per_s": n * steps / wall, "profile": solver.timer.table(steps)}

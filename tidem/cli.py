@@ -289,9 +289,18 @@ def bench(
                                                 "(id type diameter density x y z) or an .npz with 'x'")] = None,
     render: Annotated[bool, typer.Option("--render", help="Frames per second of the frame renderer instead "
                                          "(1280x720, speed and temperature colours)")] = False,
+    profile: Annotated[Optional[str], typer.Option(help="Time a scene's steps by phase instead (a shipped scene "
+                                                   "or a file; --steps timed steps after --warmup)")] = None,
+    warmup: Annotated[int, typer.Option(help="With --profile: untimed steps first (compiles every kernel)")] = 200,
+    resume: Annotated[Optional[Path], typer.Option(help="With --profile: start from the checkpoint of this run "
+                                                   "folder (e.g. a bubbling bed rather than its first steps)")] = None,
+    set_: Sets = None,
 ):
     """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history),
-    or with --render frames per second of the renderer."""
+    with --render frames per second of the renderer, with --profile SCENE a scene's time per step by phase."""
+    if profile is not None:
+        _profile(profile, set_, steps, warmup, threads, out, resume)
+        return
     try:
         counts = [int(v) for v in (sizes or ("2000,20000" if render else "10000,50000,200000")).split(",")]
     except ValueError:
@@ -312,6 +321,35 @@ def bench(
     if bed is not None and not bed.exists():
         _fail(f"--bed {bed}: no such file", 2)
     run_matrix(counts, ["float32", "float64"] if precision == "both" else [precision], steps, threads, out, bed)
+
+
+def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, threads: int, out: Optional[Path],
+             resume: Optional[Path]) -> None:
+    """`tidem bench --profile`: a scene's steps timed by phase (`tidem.bench.profile_scene`)."""
+    import json
+
+    from tidem.bench import profile_scene
+    from tidem.phases import format_table
+    from tidem.runtime import ensure_taichi
+    from tidem.solver import RunError
+
+    if steps < 1 or warmup < 0:
+        _fail(f"--steps {steps} --warmup {warmup}: need at least one timed step and no negative warm-up", 2)
+    loaded = _load(path, sets)
+    ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
+    model = _model(loaded)
+    start = _checkpoint(resume, loaded, model) if resume is not None else None
+    try:
+        result = profile_scene(loaded, steps, warmup, model, start)
+    except SceneError as exc:
+        _fail(exc.render(), 2)
+    except RunError as exc:
+        _fail(f"{loaded.source}: the run failed during profiling: {exc}", 1)
+    typer.echo(f"{result['scene']}: {result['particles']} particles, {steps} steps after {warmup} warm-up, "
+               f"{threads} threads, {result['particle_steps_per_s']:.3g} particle-steps/s")
+    typer.echo(format_table(result["profile"]))
+    if out is not None:
+        out.write_text(json.dumps(result, indent=2))
 
 
 Varies = Annotated[Optional[list[str]], typer.Option("--vary", help="KEY=V1,V2,... (repeatable; all combinations run)")]

@@ -21,7 +21,7 @@ from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET, SERIAL_CELLS, make_flow_kernels
 from tidem.kernels.gas_grid import GasGrid
 from tidem.kernels.species import make_species_kernel
-from tidem.runtime import hot
+from tidem.phases import PhaseTimer, clock
 
 MAX_COURANT = 0.5
 
@@ -198,10 +198,11 @@ def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray,
 class GasPhase:
     """Gas fields and the gas step for one Solver."""
 
-    def __init__(self, model, S, fp):
+    def __init__(self, model, S, fp, timer: PhaseTimer | None = None):
         scene = model.scene
         gas = scene.gas
         self.gas = gas
+        self.timer = timer or PhaseTimer()
         self.gg = gg = gas_grid(scene)
         self.heat = model.features.heat
         self.species = model.features.species
@@ -269,11 +270,10 @@ class GasPhase:
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
                                       self.heat and gas.conduction)
-        self._deposit, self._couple, self._sample, self.add_forces = make_coupling_kernels(
+        self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
             model.dt if self.sources else 0.0, self.t_in)
-        self.add_forces = hot(self.add_forces)  # every DEM step, every particle
         if self.species:
             from tidem.reactions import o2_mass_fraction
 
@@ -307,10 +307,13 @@ class GasPhase:
         """One gas step ending at time t (particles at their current positions and velocities)."""
         dt = self.dt
         f = self.flow
+        lap = self.timer.lap
+        start = clock()
         if self.gas.inlet_ramp > 0:
             self.set_inlet(t)
         self._deposit(self.n)
         rate = self._couple(self.n)
+        start = lap("gas coupling", start)
         if rate * dt / self.interval > 1.0:
             raise GasError(
                 f"the drag relaxation time of the lightest particle ({1.0 / rate:.3g} s) is shorter than the DEM step "
@@ -323,7 +326,9 @@ class GasPhase:
                     f"is shorter than the DEM step ({dt / self.interval:.3g} s), so the explicit particle temperature "
                     "update would overshoot: lower numerics.dt (or dt_fraction), or raise the particles' heat capacity")
         f["predict"](dt)
+        start = lap("gas flow", start)
         self._project(dt)
+        start = lap("pressure solve", start)
         f["correct"]()
         courant = f["courant"](dt)
         if courant > MAX_COURANT:
@@ -340,7 +345,9 @@ class GasPhase:
                     f"the particles took more O2 from a gas cell than it held within one gas step at t = {t:.6g} s: "
                     f"lower gas.coupling_interval (now {self.interval}) or numerics.dt")
         self.divergence = f["divergence"](dt)
+        start = lap("gas flow", start)
         self._sample(self.n)
+        lap("gas coupling", start)
         self.steps += 1
 
     def _project(self, dt: float) -> None:

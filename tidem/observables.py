@@ -77,9 +77,10 @@ def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | No
             t0, t1 = p["t"]
             floor = p["p0"][2] + p["vel"][2] * (min(max(solver.t, t0), t1) - t0)
     means = alpha_profile(model, solver)[1]
+    ident = S.ident.to_numpy()[active]  # index in the scene's arrays (`tidem.storage_order`)
     return RunRecord(
-        time_s=solver.t, x=S.x.to_numpy()[active], v=S.v.to_numpy()[active], mass=model.mass[active],
-        radius=S.radius.to_numpy()[active], v0=model.v0[active], floor_z=float(floor), series=series,
+        time_s=solver.t, x=S.x.to_numpy()[active], v=S.v.to_numpy()[active], mass=model.mass[ident],
+        radius=S.radius.to_numpy()[active], v0=model.v0[ident], floor_z=float(floor), series=series,
         temperature=S.T.to_numpy()[active] if model.features.heat else None,
         alpha_means=means,
         contact_rows=contact_times(model, solver) if model.features.contact_time else [],

@@ -22,6 +22,7 @@ from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_cs
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.model import Model
+from tidem.phases import clock
 from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
 from tidem.reactions import reaction_summary
@@ -81,14 +82,15 @@ class Output:
         S = solver.state
         active = S.active.to_numpy().astype(bool)
         idx = np.flatnonzero(active)
+        ident = S.ident.to_numpy()[idx]  # index in the scene (storage is re-sorted as the bed flows)
         name = f"snap_{len(self.entries):05d}.vtp"
         extra = {"temperature": S.T.to_numpy()[idx]} if self.model.features.heat else {}
         write_vtp(self.snap_dir / name, S.x.to_numpy()[idx], {**extra,
             "radius": S.radius.to_numpy()[idx],
             "velocity": S.v.to_numpy()[idx],
             "omega": S.w.to_numpy()[idx],
-            "id": idx.astype(np.int32),
-            "group": self.model.group[idx].astype(np.int32),
+            "id": ident.astype(np.int32),
+            "group": self.model.group[ident].astype(np.int32),
             "contacts": S.ncontact.to_numpy()[idx].astype(np.int32),
         }, time=solver.t)
         self.entries.append((solver.t, f"snapshots/{name}"))
@@ -315,6 +317,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             state["reaction_rows"] = out.reactions.rows
         checkpoint.save(out.dir, solver, state, model.loaded.raw)
 
+    solver.timer.reset()
+    lap, steps0 = solver.timer.lap, solver.steps
     bar = RunProgress(enabled=progress, t_end=t_end, particles=int(model.active0.sum()) or model.capacity)
     last_ckpt = time.perf_counter()
     in_step = False
@@ -322,6 +326,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     try:
         with bar, stop:
             while True:
+                start = clock()
                 if solver.t >= next_series - 1e-12 * t_end:
                     out.sample(solver)
                     last_sample_t = solver.t
@@ -337,11 +342,13 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     out.averages.record(solver)
                 if view is not None:
                     view.update(solver)
+                lap("output", start)
                 if solver.steps >= total_steps:
                     break
                 in_step = True
                 solver.step()
                 in_step = False
+                start = clock()
                 if solver.steps % 50 == 0 or solver.steps == total_steps:
                     bar.update(solver.t, solver.steps, time.perf_counter() - t0)
                 if stop.signal is not None:
@@ -352,8 +359,11 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     last_ckpt = now
                     if ckpt_every:
                         next_ckpt = _next_after(solver.t, ckpt_every)
+                lap("output", start)
+            start = clock()
             solver.check()
             save_checkpoint()
+            lap("output", start)
     except RunError as exc:
         status, message = "failed", str(exc)
     except KeyboardInterrupt:
@@ -363,18 +373,21 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             save_checkpoint()
             message += "; checkpoint written, continue with --resume"
     finally:
+        start = clock()
         out.series.close()
         if model.angle_bins:
             out.write_alpha_profile(solver)
         if out.averages is not None:
             write_averages(out.dir, model, solver)
         bed_profiles = out.write_bed_profiles(solver)
+        lap("output", start)
         wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
         series = read_series(out.series.path) if out.series.path.is_file() else {}
         counts = series.get("particles")
         data = summary(model, solver, status, wall, message,
                        float(np.mean(counts)) if counts is not None and len(counts) else None)
         data["setup_s"] = setup_s
+        data["profile"] = solver.timer.table(solver.steps - steps0)
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])
         if status == "finished":

@@ -2,10 +2,14 @@
 
 `step()` is a short list of kernel launches and makes no physics decisions: kick-drift,
 neighbour rebuild when a particle moved more than half the skin (or particles appeared),
-a gas step every `gas.coupling_interval` steps (scenes with gas), forces (contacts, then
-drag and pressure-gradient force), reactions (with a rebuild when a particle burnt out or
-left), kick. Health checks (NaN, runaway overlap, capacity overflow) run every
-`numerics.check_interval` steps and raise `RunError` naming the particle and the fix.
+every `numerics.sort_interval` rebuilds first a re-sort of particle storage into cell order
+(`tidem.storage_order`), a gas step every `gas.coupling_interval` steps (scenes with gas),
+forces (contacts, then drag and pressure-gradient force), reactions (with a rebuild when a
+particle burnt out or left), kick. Without reactions the kick kernel itself finishes the
+forces (the contacts' partner pass and the gas forces), so a step is three kernel launches.
+Each phase's wall time is booked in `timer` (`tidem.phases`, run.json's profile). Health
+checks (NaN, runaway overlap, capacity overflow) run every `numerics.check_interval` steps
+and raise `RunError` naming the particle and the fix.
 """
 
 from __future__ import annotations
@@ -23,9 +27,11 @@ from tidem.kernels.integrate import make_integrators
 from tidem.kernels.outlet import make_recycle_kernel
 from tidem.gas import GasError, GasPhase
 from tidem.model import Model, is_heated
+from tidem.phases import PhaseTimer, clock
 from tidem.pour import Pourer
 from tidem.runtime import hot
 from tidem.state import State, allocate
+from tidem.storage_order import SORT_MIN_PARTICLES, sort_storage
 
 
 class RunError(RuntimeError):
@@ -45,17 +51,29 @@ class Solver:
         self.t = 0.0
         self.steps = 0
         self.rebuilds = 0
+        self.timer = PhaseTimer()  # seconds per phase of the step (run.json's profile)
         self._rebuild = None
         if f.contacts:
             self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
                                                       f.rolling, f.hysteretic, S, f.growth))
-        self._forces = hot(make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes,
-                                             f.n_tubes, model.wall_slots, model.gravity, S, f.contact_time,
-                                             model.pair_params.shape[0] == 1, f.heat, model.angle_bins,
-                                             model.fluid_layer, f.contacts, f.radiation, f.foil, f.wall_foil))
+        forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes, f.n_tubes,
+                                   model.wall_slots, model.gravity, S, f.contact_time,
+                                   model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
+                                   f.contacts, f.radiation, f.foil, f.wall_foil)
+        self.gas = None
+        if f.gas:
+            self.gas = GasPhase(model, S, ti.f64 if f.precision == "float64" else ti.f32, self.timer)
+        # Without reactions (which act between the forces and the kick) the kick kernel also
+        # runs the partner pass of the contact forces and adds the gas forces: one launch less each.
+        self._fused = not f.reactions
+        self._own_forces = hot(forces.own)
+        self._partner_forces = forces.partner if self._fused or forces.partner is None else hot(forces.partner)
+        finish = ()
+        if self._fused:
+            finish = ((forces.gather,) if f.contacts else ()) + ((self.gas.force,) if self.gas else ())
         self._kick_drift, self._kick = map(hot, make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
                                                                  model.angle_bins, f.foil, f.growth, f.wall_foil,
-                                                                 f.n_planes))
+                                                                 f.n_planes, finish))
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, S)
         self._recycle = None
@@ -63,9 +81,6 @@ class Solver:
             o = model.scene.outlet
             self._recycle = make_recycle_kernel(o.height, o.reinsert_height, model.wall_slots, S)
         self.pourer = Pourer(model, S) if model.pours else None
-        self.gas = None
-        if f.gas:
-            self.gas = GasPhase(model, S, ti.f64 if f.precision == "float64" else ti.f32)
         self._react = None
         if f.reactions:
             G = self.gas.G if self.gas is not None else None
@@ -79,6 +94,10 @@ class Solver:
             self._average = make_averaging_kernel(model.grid, a.lo, a.cells, a.size, f.n_tubes, a.rings, a.ring_width,
                                                   a.sectors, f.heat, S)
         self._check_every = model.scene.numerics.check_interval
+        # scenes whose outputs follow particles by storage index (pours, reactions, contact timing) keep their
+        # order, and so do small ones, which fit in cache whatever their order
+        sortable = f.contacts and self.n >= SORT_MIN_PARTICLES and not (model.pours or f.reactions or f.contact_time)
+        self._sort_every = model.scene.numerics.sort_interval if sortable else 0
         self.start()
 
     def start(self) -> None:
@@ -88,35 +107,51 @@ class Solver:
         self.rebuild()
         if self.gas is not None:
             self._gas_step()
-        self._forces(self.n, self.t, self.dt)
+        self._own_forces(self.n, self.t, self.dt)
+        self._finish_forces()
+        self.check()
+
+    def _finish_forces(self) -> None:
+        """The partner pass of the contact forces and the gas forces, in kernels of their own."""
+        if self._partner_forces is not None:
+            self._partner_forces(self.n, self.t)
         if self.gas is not None:
             self.gas.add_forces(self.n)
-        self.check()
 
     def step(self) -> None:
         dt = self.dt
+        lap = self.timer.lap
+        t = clock()
         self._kick_drift(self.n, dt)
         self.t += dt
         self.steps += 1
         need = self.state.max_disp[None] > 0.5 * self.model.skin
+        t = lap("kick-drift", t)
         if self._recycle is not None:
             need |= self._recycle(self.n) > 0
         if self.pourer is not None:
             need |= self.pourer.insert(self.t) > 0
+        t = lap("inflow and outflow", t)
         if need:
             self.rebuild()
+            t = lap("neighbour build", t)
         if self.gas is not None and self.steps % self.gas.interval == 0:
             self._gas_step()
-        self._forces(self.n, self.t, dt)
-        if self.gas is not None:
-            self.gas.add_forces(self.n)
-        if self._react is not None:
+            t = clock()
+        self._own_forces(self.n, self.t, dt)
+        t = lap("contact forces", t)
+        if not self._fused:  # else the kick finishes the forces (partner pass, gas forces)
+            self._finish_forces()
+            t = lap("contact forces", t)
             left = self.gas.interval - 1 - self.steps % self.gas.interval if self.gas is not None else 0
             if self._react(self.n, self.t, dt, left) > 0:
                 self.rebuild()  # partners of a removed particle drop it (and their history with it) at once
-        self._kick(self.n, dt)
+            t = lap("reactions", t)
+        self._kick(self.n, self.t, dt)
+        t = lap("kick", t)
         if self.steps % self._check_every == 0:
             self.check()
+            t = lap("checks", t)
         if self.model.angle_bins and self.profile_t0 is None and self.t >= self.model.scene.heat.profile_start:
             self.state.tube_bin_energy.fill(0.0)
             if self.model.features.foil:
@@ -130,8 +165,11 @@ class Solver:
         self._average(self.n)
 
     def rebuild(self) -> None:
-        """Neighbour list (none with contact.model = 'none')."""
+        """Neighbour list (none with contact.model = 'none'); every numerics.sort_interval
+        rebuilds the storage is first re-sorted into cell order (`tidem.storage_order`)."""
         if self._rebuild is not None:
+            if self._sort_every and self.rebuilds % self._sort_every == 0:
+                sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
             self._rebuild(self.n)
             self.rebuilds += 1
 
@@ -158,14 +196,14 @@ class Solver:
         bad = active & ~np.isfinite(x).all(axis=1)
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
-            raise RunError(f"particle {i} has a non-finite position at t = {self.t:.6g} s (step {self.steps}); "
+            raise RunError(f"particle {S.ident[i]} has a non-finite position at t = {self.t:.6g} s (step {self.steps}); "
                            "the time step is too large for the contact stiffness: lower numerics.dt_fraction")
         ovl = S.ovl.to_numpy()
         limit = self.model.scene.numerics.max_overlap
         if (ovl[active] > limit).any():
             i = int(np.argmax(np.where(active, ovl, 0)))
             raise RunError(
-                f"particle {i} overlaps a neighbour or wall by {100 * ovl[i]:.1f} % of its radius at t = {self.t:.6g} s "
+                f"particle {S.ident[i]} overlaps a neighbour or wall by {100 * ovl[i]:.1f} % of its radius at t = {self.t:.6g} s "
                 f"(limit {100 * limit:.0f} %): the contacts are too soft or too fast for this step; raise "
                 "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
 

@@ -12,6 +12,8 @@ Per-particle fields, shape [capacity]:
   radius, mass, inv_mass [1/kg], inv_inertia [1/(kg m^2)], mat (material index), active
   ovl              largest overlap / smaller radius over the particle's contacts
   ncontact         number of contacts
+  ident            the particle's index in the Model's arrays (storage is re-sorted into
+                   cell order as the bed flows, `tidem.storage_order`)
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
@@ -95,31 +97,39 @@ def allocate(model: Model) -> State:
     def place(shape, name, dtype=fp, n=None):
         fb.dense(ti.ij if len(shape) == 2 else ti.i, shape).place(make(name, dtype, n))
 
+    S.particle_fields = []  # names of the fields indexed by particle first (permuted by a storage sort)
+
+    def per_particle(shape, name, dtype=fp, n=None):
+        place(shape, name, dtype, n)
+        S.particle_fields.append(name)
+
     # What the pair loop reads of a partner sits together in memory (array of structs).
     hot = [make(k, n=3) for k in ("x", "v", "w")] + [make("radius"), make("mass"), make("mat", ti.i32)]
     fb.dense(ti.i, N).place(*hot)
+    S.particle_fields += ["x", "v", "w", "radius", "mass", "mat"]
+    per_particle((N,), "ident", ti.i32)
     if feat.growth:
-        place((N,), "r_build")
+        per_particle((N,), "r_build")
     for name in ("f", "tq", "x_build"):
-        place((N,), name, n=3)
+        per_particle((N,), name, n=3)
     for name in ("inv_mass", "inv_inertia", "ovl"):
-        place((N,), name)
+        per_particle((N,), name)
     for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask"):
-        place((N,), name, ti.i32)
+        per_particle((N,), name, ti.i32)
     if feat.contact_time:
-        place((N,), "touch_start")
-        place((N,), "touch_end")
+        per_particle((N,), "touch_start")
+        per_particle((N,), "touch_end")
     for name in ("nbr", "nbr_new", "src"):
-        place((N, K), name, ti.i32)
-    place((N, K), "ft", n=3)
-    place((N, W), "wid", ti.i32)
-    place((N, W), "wft", n=3)
+        per_particle((N, K), name, ti.i32)
+    per_particle((N, K), "ft", n=3)
+    per_particle((N, W), "wid", ti.i32)
+    per_particle((N, W), "wft", n=3)
     if feat.rolling:
-        place((N, K), "mr", n=3)
-        place((N, W), "wmr", n=3)
+        per_particle((N, K), "mr", n=3)
+        per_particle((N, W), "wmr", n=3)
     if feat.hysteretic:
-        place((N, K), "dmax")
-        place((N, W), "wdmax")
+        per_particle((N, K), "dmax")
+        per_particle((N, W), "wdmax")
     nc = model.grid.n_cells
     for name in ("cell_count", "cell_start", "cell_fill"):
         place((nc,), name, ti.i32)
@@ -138,9 +148,9 @@ def allocate(model: Model) -> State:
     fb.place(S.max_disp)
     if feat.heat:
         for name in ("T", "q", "inv_heat_cap"):
-            place((N,), name)
+            per_particle((N,), name)
         if feat.contacts:
-            place((N, K), "qpair")
+            per_particle((N, K), "qpair")
         NS = max(len(model.planes) + len(model.tubes), 1)
         place((NS,), "surf_T")
         place((NS,), "surf_rate")
@@ -159,22 +169,22 @@ def allocate(model: Model) -> State:
             place((len(model.tubes), model.angle_bins), "tube_bin_Tsum", ti.f64)
     if feat.gas:
         for name in ("gK", "geps"):
-            place((N,), name)
+            per_particle((N,), name)
         for name in ("gu", "ggp"):
-            place((N,), name, n=3)
+            per_particle((N,), name, n=3)
         if feat.heat:
             for name in ("gH", "gT"):
-                place((N,), name)
+                per_particle((N,), name)
         if feat.species:
-            place((N,), "gY")
+            per_particle((N,), "gY")
     if feat.reactions:
         from tidem.reactions import N_SUMS
 
-        place((N,), "rx", ti.i32)
+        per_particle((N,), "rx", ti.i32)
         place((N_SUMS,), "rsum", ti.f64)
         if "sublimation" in feat.reactions:
-            place((N,), "rt0")
-            place((N,), "rt1")
+            per_particle((N,), "rt0")
+            per_particle((N,), "rt1")
     if feat.averaging:
         from tidem.kernels.averaging import channels
 
@@ -222,6 +232,7 @@ def allocate(model: Model) -> State:
             S.rt0.fill(-1.0)
             S.rt1.fill(0.0)
     S.active.from_numpy(model.active0.astype(np.int32))
+    S.ident.from_numpy(np.arange(N, dtype=np.int32))
     S.wid.fill(-1)
     if feat.contact_time:
         S.touch_start.fill(-1.0)

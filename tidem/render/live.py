@@ -96,7 +96,7 @@ class LiveView:
         elif self.field == "temperature":
             data["temperature"] = S.T.to_numpy()[idx]
         elif self.field == "group":
-            data["group"] = self.model.group[idx]
+            data["group"] = self.model.group[S.ident.to_numpy()[idx]]
         elif self.field == "contacts":
             data["contacts"] = S.ncontact.to_numpy()[idx]
         values = field_values(self.field, data)

@@ -228,6 +228,7 @@ class Numerics(Strict):
     max_wall_contacts: int = Field(default=4, ge=1, le=32)
     max_overlap: Number = Field(default=0.05, gt=0, le=0.5)
     check_interval: int = Field(default=100, ge=1)
+    sort_interval: int = Field(default=20, ge=0)
 
 
 class Output(Strict):

@@ -1,0 +1,45 @@
+"""The per-phase profile of a run: run.json's `profile` accounts for the loop's wall time, and
+`tidem bench --profile SCENE` prints the table (phases named in `tidem.phases.PHASES`)."""
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from tidem.cli import app
+from tidem.phases import PHASES, PhaseTimer
+
+runner = CliRunner()
+
+
+def test_laps_accumulate_per_phase_and_total():
+    timer = PhaseTimer()
+    t = timer.lap("contact forces", 0.0)
+    timer.lap("kick", t - 0.5)
+    table = timer.table(steps=10)
+    assert table["kick"]["seconds"] == pytest.approx(0.5, abs=1e-3)
+    assert table["total"]["seconds"] == pytest.approx(table["kick"]["seconds"] + table["contact forces"]["seconds"])
+    assert table["kick"]["ms_per_step"] == pytest.approx(50.0, abs=0.1)
+    assert set(table) <= set(PHASES) | {"total"}
+
+
+def test_run_json_profile_accounts_for_the_wall_time(tmp_path):
+    out = tmp_path / "impact"
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render"])
+    assert result.exit_code == 0, result.output
+    run = json.loads((out / "run.json").read_text())
+    profile = run["profile"]
+    assert {"contact forces", "kick-drift", "kick", "output"} <= set(profile)
+    # the phases cover the stepping loop: their sum is the loop's wall time less only the Python glue
+    assert 0.8 * run["wall_s"] <= profile["total"]["seconds"] <= run["wall_s"]
+
+
+def test_bench_profile_prints_the_phase_table_and_refuses_bad_counts(tmp_path):
+    result = runner.invoke(app, ["bench", "--profile", "sphere_impact", "--steps", "50", "--warmup", "5",
+                                 "--out", str(tmp_path / "p.json")])
+    assert result.exit_code == 0, result.output
+    assert "particle-steps/s" in result.output and "contact forces" in result.output
+    saved = json.loads((tmp_path / "p.json").read_text())
+    assert saved["steps"] == 50 and saved["profile"]["total"]["ms_per_step"] > 0
+    bad = runner.invoke(app, ["bench", "--profile", "sphere_impact", "--steps", "0"])
+    assert bad.exit_code == 2 and "--steps 0" in bad.output

@@ -1,0 +1,100 @@
+"""Storage order: the particles re-sorted into cell order as the bed flows (as LAMMPS' atom
+sorting does), so that partners that sit close in space sit close in memory.
+
+Fills and benchmark beds start in cell order (`tidem.model.spatial_key`), but a flowing or
+bubbling bed mixes within seconds of bed time and the force and neighbour loops then read
+their partners from all over memory. Every `numerics.sort_interval` neighbour rebuilds the
+Solver calls `sort_storage` right before the rebuild (in scenes of at least
+SORT_MIN_PARTICLES that neither pour nor react nor time contacts):
+
+1. the new order: active particles first, by broad-phase cell (x, then y, then z, the order
+   the neighbour build scans), ties kept in the present order (a stable sort);
+2. every per-particle field of the State (`State.particle_fields`, rows of the Verlet list and
+   of the wall slots included) is permuted; `ident` follows, so that outputs still name each
+   particle by its index in the scene (snapshots' `id`, error messages);
+3. a pair's history lives in the row of its lower-index particle (`kernels/contact.py`); where
+   the new numbering swaps which of the two is lower, it is handed to the partner's mirror slot,
+   seen from the partner's side (springs change sign);
+4. partner indices in `nbr` are renumbered and each row is re-sorted by its new partner index,
+   taking its history along: the neighbour build that follows matches old and new rows by a
+   merge of sorted rows (`kernels/broadphase.py`) and so carries every contact's history over.
+
+The order depends on positions only, at fixed steps, so float64 runs stay deterministic and a
+resumed run bit-identical (the rebuild count, which times the sorts, is in the checkpoint).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tidem.model import spatial_key
+
+SORT_MIN_PARTICLES = 1024  # smaller scenes fit in cache in any order and keep theirs
+ROW_FIELDS = ("nbr", "ft", "mr", "dmax", "qpair")  # [capacity, K] fields that follow their row's order
+SCRATCH = ("nbr_new", "src", "sorted_idx", "pcell")  # rewritten by the next neighbour build
+HISTORY = {"ft": -1.0, "mr": -1.0, "dmax": 1.0}  # pair history, and its sign seen from the partner
+
+
+def new_order(x: np.ndarray, active: np.ndarray, lo, cell: float) -> np.ndarray:
+    """Storage permutation: order[new] = old; active particles first, in cell order."""
+    key = spatial_key(x, lo, cell)
+    key = np.where(active, key, key.max(initial=0) + 1)
+    return np.argsort(key, kind="stable")
+
+
+def sort_storage(S, lo, cell) -> bool:
+    """Permute the State's per-particle fields into cell order (module docstring). Returns False,
+    doing nothing, when the storage is already in that order."""
+    order = new_order(S.x.to_numpy(), S.active.to_numpy().astype(bool), lo, cell)
+    if np.array_equal(order, np.arange(len(order))):
+        return False
+    permute_storage(S, order)
+    return True
+
+
+def permute_storage(S, order: np.ndarray) -> None:
+    """Store particle order[k] at k: every per-particle field permuted, partners renumbered and
+    each Verlet row re-sorted by partner with its history (steps 2-4 of the module docstring).
+    The neighbour list must be rebuilt before the next force evaluation (mirror slots)."""
+    renumber = np.empty_like(order)
+    renumber[order] = np.arange(len(order))
+    nbr, count = S.nbr.to_numpy(), S.nbr_n.to_numpy()
+    slots = np.arange(nbr.shape[1])
+    history = {name: getattr(S, name).to_numpy() for name in HISTORY if hasattr(S, name)}
+    hand_over(history, nbr, count, S.src.to_numpy(), renumber)
+    listed = slots[None, :] < count[order][:, None]
+    partners = np.where(listed, renumber[nbr[order].clip(0)], np.iinfo(np.int32).max)
+    within = np.argsort(partners, axis=1, kind="stable")  # each row by its new partner index
+    for name in S.particle_fields:
+        if name in SCRATCH:
+            continue
+        field = getattr(S, name)
+        values = history[name][order] if name in history else field.to_numpy()[order]
+        if name == "nbr":
+            values = np.take_along_axis(np.where(listed, partners, -1), within, axis=1).astype(np.int32)
+        elif name in ROW_FIELDS:
+            values = np.take_along_axis(values, within if values.ndim == 2 else within[:, :, None], axis=1)
+        field.from_numpy(np.ascontiguousarray(values))
+
+
+def hand_over(history: dict, nbr: np.ndarray, count: np.ndarray, mirror: np.ndarray, renumber: np.ndarray) -> None:
+    """A pair's history lives in the row of its lower-index particle (`kernels/contact.py`); where
+    the new numbering makes the partner the lower one, copy it into the partner's mirror slot,
+    seen from the partner's side: tangential and rolling springs change sign (the relative
+    velocity and spin do), the maximum overlap does not."""
+    n, k = nbr.shape
+    rows = np.arange(n)[:, None]
+    owner = (np.arange(k)[None, :] < count[:, None]) & (nbr > rows)
+    i, slot = np.nonzero(owner)
+    j, m = nbr[i, slot], mirror[i, slot]
+    flip = (renumber[i] > renumber[j]) & (m >= 0)
+    i, slot, j, m = i[flip], slot[flip], j[flip], m[flip]
+    for name, values in history.items():
+        values[j, m] = values[i, slot] * HISTORY[name]
+
+
+def scene_order(S, values: np.ndarray) -> np.ndarray:
+    """A per-particle array read from the State, put back into the scene's (the Model's) order."""
+    out = np.empty_like(values)
+    out[S.ident.to_numpy()] = values
+    return out
