@@ -40,7 +40,8 @@ from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radi
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
-                      radiation: bool = False, foil: bool = False, wall_foil: bool = False):
+                      radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
+                      surface_reach: float = 0.0):
     """Return a namespace of the two passes: kernels `own(n, t, dt)` and `partner(n, t)` (None
     without pairs), and `gather(i, t)`, the partner pass for one particle as a Taichi func (for
     a kernel that fuses it with the rest of the step, `kernels/integrate.py`); `single_material` loads the pair parameters once per
@@ -55,7 +56,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     neighbour list: gravity and walls only. `radiation` adds grey radiation from a heated surface
     to the particles touching it; with `foil`, a tube with tube_foil[k][0] > 0 (a heat flux) has
     the temperature of its foil in the angle bin of the contact point, tube_bin_T[k, b]; with
-    `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's temperature plane_foil_T[s]."""
+    `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's temperature plane_foil_T[s].
+    `cull` (bit s: surface s does not move) lets each particle skip the static surfaces farther
+    than `surface_reach` (skin plus the conduction reach) at the last neighbour build, as marked
+    in S.near by the kernel `mark_near(n)` (None without culling); a particle far from every
+    wall and tube then costs no surface evaluation at all."""
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
@@ -257,67 +262,72 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             if ti.static(hysteretic):
                                 S.dmax[i, k] = 0.0
                 held = S.wmask[i]  # bit s set: surface s has a history slot
+                nearby = S.near[i] if ti.static(cull) else 0
                 for s in ti.static(range(n_surf)):
-                    delta, nrm, u = surface_contact(i, s, t)
-                    slot = -1
-                    if (held >> s) & 1:
-                        for q in range(W):
-                            if S.wid[i, q] == s:
-                                slot = q
-                    if delta > 0.0:
-                        if slot < 0:
+                    near = 1
+                    if ti.static(cull >> s & 1):
+                        near = (nearby >> s) & 1  # surfaces out of reach at the last neighbour build
+                    if near:
+                        delta, nrm, u = surface_contact(i, s, t)
+                        slot = -1
+                        if (held >> s) & 1:
                             for q in range(W):
-                                if slot < 0 and S.wid[i, q] < 0:
+                                if S.wid[i, q] == s:
                                     slot = q
-                                    S.wid[i, q] = s
-                                    held |= 1 << s
-                                    S.wft[i, q] = zero3
-                                    if ti.static(rolling):
-                                        S.wmr[i, q] = zero3
-                                    if ti.static(hysteretic):
-                                        S.wdmax[i, q] = 0.0
-                        if slot < 0:
-                            ti.atomic_add(S.overflow[1], 1)
+                        if delta > 0.0:
+                            if slot < 0:
+                                for q in range(W):
+                                    if slot < 0 and S.wid[i, q] < 0:
+                                        slot = q
+                                        S.wid[i, q] = s
+                                        held |= 1 << s
+                                        S.wft[i, q] = zero3
+                                        if ti.static(rolling):
+                                            S.wmr[i, q] = zero3
+                                        if ti.static(hysteretic):
+                                            S.wdmax[i, q] = 0.0
+                            if slot < 0:
+                                ti.atomic_add(S.overflow[1], 1)
+                            else:
+                                v_rel = vi - u + (ri * wi).cross(nrm)
+                                dmax = 0.0
+                                if ti.static(hysteretic):
+                                    dmax = S.wdmax[i, slot]
+                                mr = zero3
+                                if ti.static(rolling):
+                                    mr = S.wmr[i, slot]
+                                f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                                    nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
+                                    S.ps[mat_i, s], S.wft[i, slot], mr, dmax, dt)
+                                force += f
+                                torque += (ri * nrm).cross(f_t) + m_roll
+                                S.wft[i, slot] = xi_new
+                                if ti.static(heat):
+                                    if S.surf_T[s] > 0.0:
+                                        b = tube_bin(s, nrm)
+                                        t_wall = wall_temperature(s, b)
+                                        flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (t_wall - S.T[i])
+                                        if ti.static(radiation):
+                                            flow += wall_radiation(S.ps[mat_i, s], ri, t_wall, S.T[i])
+                                        heat_in += flow
+                                        surface_heat(s, b, flow)
+                                if ti.static(rolling):
+                                    S.wmr[i, slot] = mr_new
+                                if ti.static(hysteretic):
+                                    S.wdmax[i, slot] = dmax_new
+                                worst = ti.max(worst, delta / ri)
+                                touching += 1
                         else:
-                            v_rel = vi - u + (ri * wi).cross(nrm)
-                            dmax = 0.0
-                            if ti.static(hysteretic):
-                                dmax = S.wdmax[i, slot]
-                            mr = zero3
-                            if ti.static(rolling):
-                                mr = S.wmr[i, slot]
-                            f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                                nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
-                                S.ps[mat_i, s], S.wft[i, slot], mr, dmax, dt)
-                            force += f
-                            torque += (ri * nrm).cross(f_t) + m_roll
-                            S.wft[i, slot] = xi_new
-                            if ti.static(heat):
-                                if S.surf_T[s] > 0.0:
+                            if slot >= 0:
+                                S.wid[i, slot] = -1
+                                held &= ~(1 << s)
+                            if ti.static(pfp):
+                                if -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
                                     b = tube_bin(s, nrm)
-                                    t_wall = wall_temperature(s, b)
-                                    flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (t_wall - S.T[i])
-                                    if ti.static(radiation):
-                                        flow += wall_radiation(S.ps[mat_i, s], ri, t_wall, S.T[i])
+                                    flow = pfp_conductance(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
+                                        wall_temperature(s, b) - S.T[i])
                                     heat_in += flow
                                     surface_heat(s, b, flow)
-                            if ti.static(rolling):
-                                S.wmr[i, slot] = mr_new
-                            if ti.static(hysteretic):
-                                S.wdmax[i, slot] = dmax_new
-                            worst = ti.max(worst, delta / ri)
-                            touching += 1
-                    else:
-                        if slot >= 0:
-                            S.wid[i, slot] = -1
-                            held &= ~(1 << s)
-                        if ti.static(pfp):
-                            if -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
-                                b = tube_bin(s, nrm)
-                                flow = pfp_conductance(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
-                                    wall_temperature(s, b) - S.T[i])
-                                heat_in += flow
-                                surface_heat(s, b, flow)
                 S.wmask[i] = held
                 S.f[i] = force
                 S.tq[i] = torque
@@ -327,6 +337,20 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 S.ncontact[i] = touching
                 if ti.static(not pairs):
                     note_contact_time(i, touching, t)
+
+    @ti.kernel
+    def mark_near_surfaces(n: ti.i32):
+        """near[i] bit s: static surface s is within reach of particle i (called after each neighbour
+        build; until the next one no particle moves more than half the skin)."""
+        for i in range(n):
+            if S.active[i]:
+                bits = 0
+                for s in ti.static(range(n_surf)):
+                    if ti.static(cull >> s & 1):
+                        delta, _n, _u = surface_contact(i, s, 0.0)
+                        if -delta < surface_reach:
+                            bits |= 1 << s
+                S.near[i] = bits
 
     @ti.func
     def gather_partners(i, t):
@@ -370,4 +394,5 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             if S.active[i]:
                 gather_partners(i, t)
 
-    return SimpleNamespace(own=own_forces, partner=partner_forces if pairs else None, gather=gather_partners)
+    return SimpleNamespace(own=own_forces, partner=partner_forces if pairs else None, gather=gather_partners,
+                           mark_near=mark_near_surfaces if cull else None)

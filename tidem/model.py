@@ -140,7 +140,7 @@ class Model:
         """Expected memory of the Taichi fields [bytes] (see `tidem.state.State`)."""
         fp = 8 if self.features.precision == "float64" else 4
         k, w = self.max_neighbors, self.wall_slots
-        per = fp * (3 * 7 + 6) + 4 * 7  # vectors x v w f tq x_build + scalars; ints
+        per = fp * (3 * 7 + 6) + 4 * 8  # vectors x v w f tq x_build + scalars; ints
         per += k * (4 * 3 + 3 * fp)  # nbr, nbr_new, src, ft
         per += w * (4 + 3 * fp)
         if self.features.rolling:

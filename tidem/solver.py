@@ -38,6 +38,13 @@ class RunError(RuntimeError):
     """The simulation became invalid; the message names the particle or setting and the fix."""
 
 
+def static_surfaces(model: Model) -> int:
+    """Bit s set for each surface (planes, then tubes) that never moves: the contact kernel skips it
+    for particles out of its reach at the last neighbour build."""
+    still = [not any(p["vel"]) for p in model.planes] + [True] * len(model.tubes)
+    return sum(1 << s for s, fixed in enumerate(still) if fixed)
+
+
 class Solver:
     """Advance a Model's State in time."""
 
@@ -59,7 +66,9 @@ class Solver:
         forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes, f.n_tubes,
                                    model.wall_slots, model.gravity, S, f.contact_time,
                                    model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
-                                   f.contacts, f.radiation, f.foil, f.wall_foil)
+                                   f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
+                                   model.skin + model.heat_reach)
+        self._mark_near = forces.mark_near
         self.gas = None
         if f.gas:
             self.gas = GasPhase(model, S, ti.f64 if f.precision == "float64" else ti.f32, self.timer)
@@ -171,6 +180,8 @@ class Solver:
             if self._sort_every and self.rebuilds % self._sort_every == 0:
                 sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
             self._rebuild(self.n)
+            if self._mark_near is not None:
+                self._mark_near(self.n)
             self.rebuilds += 1
 
     def _gas_step(self) -> None:

@@ -37,7 +37,8 @@ sensible heat leaving with reacted mass [J], heat handed back to the gas [J], pa
 particles escaped, escaped mass [kg]); with sublimation rt0 (time first seen [s]) and rt1
 (time sublimated away [s], minus the time it left through the exit, 0 while present).
 Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax;
-wmask [capacity]: bit s set while surface s holds one of the particle's slots.
+wmask [capacity]: bit s set while surface s holds one of the particle's slots; near
+[capacity]: bit s set when static surface s was within reach at the last neighbour build.
 With [averaging] (`kernels/averaging.py`, source 3 eq. 34-36): float64 sums per control volume
 and channel, avg_cells [cells x, cells z, channels] and, with tubes, avg_rings
 [tubes x rings, sectors, channels]; avg_samples (number of samples taken).
@@ -114,7 +115,7 @@ def allocate(model: Model) -> State:
         per_particle((N,), name, n=3)
     for name in ("inv_mass", "inv_inertia", "ovl"):
         per_particle((N,), name)
-    for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask"):
+    for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask", "near"):
         per_particle((N,), name, ti.i32)
     if feat.contact_time:
         per_particle((N,), "touch_start")
