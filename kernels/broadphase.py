@@ -3,7 +3,8 @@
 Algorithm (O(N) per rebuild):
 1. count particles per cell (atomic add), exclusive prefix sum, scatter particle indices into
    cell order (counting sort);
-2. for every particle i, scan the 27 cells around it and keep every j != i with
+2. for every particle i, scan the 27 cells around it (as nine runs of three cells along z,
+   which are adjacent in the sorted index) and keep every j != i with
    |x_j - x_i| < r_i + r_j + skin (a *full* list: each pair appears in both rows, so the force
    loop writes only its own particle and needs no atomics, which keeps runs deterministic);
 3. sort the row by partner index (so the result does not depend on thread timing), then
@@ -82,25 +83,34 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             ri = S.radius[i]
             c0 = cell_coord(xi)
             count = 0
-            for dx, dy, dz in ti.ndrange((-1, 2), (-1, 2), (-1, 2)):
-                c = c0 + ti.Vector([dx, dy, dz])
+            for dx, dy in ti.ndrange((-1, 2), (-1, 2)):
+                c = c0 + ti.Vector([dx, dy, 0])
                 inside = True
-                for a in ti.static(range(3)):
+                for a in ti.static(range(2)):
                     if ti.static(per[a]):
                         c[a] = (c[a] + cells[a]) % cells[a]
                     elif c[a] < 0 or c[a] >= cells[a]:
                         inside = False
                 if inside:
-                    cid = cell_id(c)
-                    for s in range(S.cell_start[cid], S.cell_start[cid] + S.cell_count[cid]):
-                        j = S.sorted_idx[s]
-                        if j != i:
-                            d = min_image(S.x[j] - xi)
-                            reach = ri + S.radius[j] + skin
-                            if d.norm_sqr() < reach * reach:
-                                if count < K:
-                                    S.nbr_new[i, count] = j
-                                count += 1
+                    for part in ti.static(range(3 if per[2] else 1)):
+                        # the z column of cells is one run of sorted_idx (z varies fastest in cell_id);
+                        # a periodic z takes it in three parts
+                        z0, z1 = c0[2] - 1, c0[2] + 1
+                        if ti.static(per[2]):
+                            z0 = (c0[2] + part - 1 + cells[2]) % cells[2]
+                            z1 = z0
+                        else:
+                            z0, z1 = ti.max(z0, 0), ti.min(z1, cells[2] - 1)
+                        first, last = cell_id(ti.Vector([c[0], c[1], z0])), cell_id(ti.Vector([c[0], c[1], z1]))
+                        for s in range(S.cell_start[first], S.cell_start[last] + S.cell_count[last]):
+                            j = S.sorted_idx[s]
+                            if j != i:
+                                d = min_image(S.x[j] - xi)
+                                reach = ri + S.radius[j] + skin
+                                if d.norm_sqr() < reach * reach:
+                                    if count < K:
+                                        S.nbr_new[i, count] = j
+                                    count += 1
             if count > K:
                 ti.atomic_max(S.overflow[0], count)
                 count = K

@@ -37,7 +37,7 @@ def listed_pairs(S, n):
     return {(i, int(nbr[i, k])) for i in range(n) for k in range(cnt[i])}
 
 
-@pytest.mark.parametrize("periodic", [["x", "y"], []])
+@pytest.mark.parametrize("periodic", [["x", "y"], [], ["z"], ["x", "y", "z"]])
 def test_neighbour_list_matches_brute_force(solver_for, periodic):
     rng = np.random.default_rng(11)
     n = 400
