@@ -11,13 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.averaging import AveragingLayout, averaging_layout
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.geometry import Grid
 from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
-from tidem.scene.checks import largest_diameter, max_diameter
+from tidem.scene.averaging_layout import AveragingLayout, averaging_layout
 from tidem.scene.errors import SceneError
 from tidem.scene.load import LoadedScene
+from tidem.scene.sizes import largest_diameter, max_diameter
 from tidem.timestep import TimeScales, time_scales, wall_impact_overlap, weight_overlap
 
 AXES = "xyz"
@@ -628,7 +628,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         if foil_errors:
             raise SceneError(src, foil_errors)
     if scene.gas is not None:
-        from tidem.gas import gas_step_checks
+        from tidem.gas_limits import gas_step_checks
 
         gas_errors = gas_step_checks(scene, dt, radius, density, np.concatenate(x0) if all_fixed else None)
         if gas_errors:
