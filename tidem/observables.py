@@ -28,9 +28,9 @@ import numpy as np
 
 from tidem.impact_conduction import hertz_impact, quasi_static_impact_heat, sun_chen_impact_heat
 from tidem.kernels import contact_laws as cl
-from tidem.model import angle_bin_area, is_heated
-from tidem.scene.observable_names import NEEDS
 from tidem.packet_model import packet_alpha
+from tidem.scene.observable_names import NEEDS
+from tidem.surfaces import angle_bin_area, is_heated
 from tidem.timestep import hertz_contact_time
 
 

@@ -26,12 +26,13 @@ from tidem.kernels.diagnostics import make_energy_kernel
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.outlet import make_recycle_kernel
 from tidem.gas import GasError, GasPhase
-from tidem.model import Model, is_heated
+from tidem.model import Model
 from tidem.phases import PhaseTimer, clock
 from tidem.pour import Pourer
 from tidem.runtime import hot
 from tidem.state import State, allocate
 from tidem.storage_order import SORT_MIN_PARTICLES, sort_storage
+from tidem.surfaces import is_heated
 
 
 class RunError(RuntimeError):

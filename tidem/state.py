@@ -52,7 +52,8 @@ import numpy as np
 import taichi as ti
 
 from tidem.kernels import contact_laws as cl
-from tidem.model import Model, angle_bin_area
+from tidem.model import Model
+from tidem.surfaces import angle_bin_area
 
 
 class State(SimpleNamespace):
