@@ -40,44 +40,32 @@ class Features:
         return self.law != cl.NONE
 
     def kernels(self) -> list[str]:
+        """What a run with these flags compiles, in words (run.json's `active_models`)."""
         if self.contacts:
             law = {cl.LINEAR: "linear", cl.HERTZ: "hertz_mindlin", cl.HYSTERETIC: "hysteretic"}[self.law]
             out = ["integrate", "broadphase(cell grid + Verlet list)", f"contact({law}, tangential history)"]
         else:
             out = ["integrate", "no contacts (gravity and gas forces only)"]
-        if self.rolling:
-            out.append("rolling resistance (model C)")
-        if self.n_planes:
-            out.append(f"plane walls ({self.n_planes})")
-        if self.n_tubes:
-            out.append(f"tubes ({self.n_tubes})")
-        if self.recycle:
-            out.append("outlet recycle")
-        if self.contact_time:
-            out.append("contact-time observer")
-        if self.packed_bed_profiles:
-            out.append("packed-bed temperature profiles (against Schumann)")
-        if self.heat:
-            out.append("heat (contact-spot conduction, gas-lens conduction between neighbours, "
-                       "wall/tube conduction after Schluender)" if self.contacts
-                       else "heat (particle temperatures; no conduction without contacts)")
-        if self.radiation:
-            out.append("radiation from heated walls and tubes to the particles touching them")
-        if self.foil:
-            out.append("heated-foil tubes (fixed heat flux, foil temperature per angle bin)")
-        if self.wall_foil:
-            out.append("heated-foil walls (fixed heat flux, one foil temperature per wall)")
-        if self.gas:
-            out.append("gas (voidage, drag, pressure projection" + (", gas energy)" if self.heat else ")"))
-        if self.species:
-            out.append("O2 transport on the gas grid")
-        for kind in dict.fromkeys(self.reactions):
-            out.append(f"reaction: {kind.replace('_', ' ')}")
-        if self.growth:
-            out.append("particle growth (neighbour list rebuilt on growth + motion)")
-        if self.averaging:
-            out.append("local averaging (cells" + (", tube ring sectors)" if self.n_tubes else ")"))
-        return out
+        heat = ("heat (contact-spot conduction, gas-lens conduction between neighbours, wall/tube conduction "
+                "after Schluender)" if self.contacts else "heat (particle temperatures; no conduction without contacts)")
+        optional = [
+            (self.rolling, "rolling resistance (model C)"),
+            (self.n_planes, f"plane walls ({self.n_planes})"),
+            (self.n_tubes, f"tubes ({self.n_tubes})"),
+            (self.recycle, "outlet recycle"),
+            (self.contact_time, "contact-time observer"),
+            (self.packed_bed_profiles, "packed-bed temperature profiles (against Schumann)"),
+            (self.heat, heat),
+            (self.radiation, "radiation from heated walls and tubes to the particles touching them"),
+            (self.foil, "heated-foil tubes (fixed heat flux, foil temperature per angle bin)"),
+            (self.wall_foil, "heated-foil walls (fixed heat flux, one foil temperature per wall)"),
+            (self.gas, "gas (voidage, drag, pressure projection" + (", gas energy)" if self.heat else ")")),
+            (self.species, "O2 transport on the gas grid"),
+            *[(True, f"reaction: {kind.replace('_', ' ')}") for kind in dict.fromkeys(self.reactions)],
+            (self.growth, "particle growth (neighbour list rebuilt on growth + motion)"),
+            (self.averaging, "local averaging (cells" + (", tube ring sectors)" if self.n_tubes else ")")),
+        ]
+        return out + [text for wanted, text in optional if wanted]
 
 
 def scene_features(scene, n_planes: int, n_tubes: int) -> Features:

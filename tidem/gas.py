@@ -6,12 +6,14 @@ of `coupling_interval` DEM steps: deposit voidage and drag, predict, project (CG
 gas energy, then sample the new gas state at the particles. Stability limits it cannot
 meet (gas Courant number, a drag relaxation time or a gas-particle heat-exchange time
 m c / H_p shorter than the DEM step) raise `GasError` with the setting to change.
+
+Set-up beside it: the grid's cells, faces and tube walls (`tidem.gas_geometry`), its Taichi
+fields (`tidem.gas_fields`), and the refusals before the first step (`tidem.gas_limits`).
 """
 
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import taichi as ti
@@ -20,6 +22,7 @@ from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import CLOSED, INLET, SERIAL_CELLS, make_flow_kernels
 from tidem.kernels.species import make_species_kernel
+from tidem.gas_fields import allocate_gas_fields
 from tidem.gas_geometry import face_kinds, gas_grid, inlet_map, solid_cells, tube_walls
 from tidem.gas_limits import MAX_COURANT
 from tidem.phases import PhaseTimer, clock
@@ -49,56 +52,11 @@ class GasPhase:
         self.tubes = model.tubes
         self.kinds = face_kinds(gg, self.solid)
         self.inlet = inlet_map(gg, gas)
-        G = SimpleNamespace()
-        fb = ti.FieldsBuilder()
-        cell_names = ["eps", "eps_old", "solid_vol", "p", "rhs", "diag", "cg_r", "cg_d", "cg_q"]
-        if self.heat:
-            cell_names += ["T", "T_new", "H", "HT"]
-        if self.sources:
-            cell_names += ["Qs"]
-        if self.species:
-            cell_names += ["Y", "Y_new", "o2_sink"]
-        for name in cell_names:
-            setattr(G, name, ti.field(fp))
-            fb.dense(ti.ijk, gg.cells).place(getattr(G, name))
-        G.solid = ti.field(ti.i32)
-        fb.dense(ti.ijk, gg.cells).place(G.solid)
-        for name, dtype in (("u", fp), ("us", fp), ("A", fp), ("C", fp), ("gp", fp), ("B", fp), ("Bv", fp),
-                            ("kind", ti.i32)):
-            comps = [ti.field(dtype) for _ in range(3)]
-            for c in range(3):
-                fb.dense(ti.ijk, gg.face_shape(c)).place(comps[c])
-            setattr(G, name, comps)
-        G.inlet = ti.field(fp)
-        fb.dense(ti.ij, gg.cells[:2]).place(G.inlet)
-        G.sums = ti.field(fp)
-        fb.dense(ti.i, 2).place(G.sums)
-        G.heat_rate = ti.field(fp)  # max over particles of H_p / (m_p c_p) [1/s], set by `couple`
-        fb.dense(ti.i, 1).place(G.heat_rate)
         walls = tube_walls(gg, model.tubes) if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
-        if walls is not None:
-            for name in ("wall_A", "wall_T", "wall_D"):
-                setattr(G, name, ti.field(fp))
-                fb.dense(ti.ijk, gg.cells).place(getattr(G, name))
-            G.wall_k = ti.field(ti.i32)
-            fb.dense(ti.ijk, gg.cells).place(G.wall_k)
-            G.wall_rate = ti.field(fp)
-            G.wall_energy = ti.field(ti.f64)
-            fb.dense(ti.i, len(model.tubes)).place(G.wall_rate, G.wall_energy)
-        if self.sources:  # enthalpy [J] and O2 [kg] that entered through inlet and outlet; most negative Y
-            G.bsum = ti.field(ti.f64)
-            fb.dense(ti.i, 3).place(G.bsum)
-        self._tree = fb.finalize()
-        self.G = G
-        G.solid.from_numpy(self.solid)
-        if walls is not None:
-            for name, values in walls.items():
-                getattr(G, name).from_numpy(values)
-        for c in range(3):
-            G.kind[c].from_numpy(self.kinds[c])
-        G.eps.fill(1.0)
-        G.eps_old.fill(1.0)
+        self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes), self.heat,
+                                                 self.sources, self.species)
+        G = self.G
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,

@@ -144,16 +144,14 @@ def memory_refusal(model: "Model") -> list[str]:
             "use fewer particles, numerics.precision = \"float32\", or a smaller numerics.max_neighbors"]
 
 
-def neighbour_grid(scene, radius: np.ndarray, d_max: float, reach: float) -> Grid:
-    """The broad phase's cell grid: cells at least `reach` wide (largest diameter + skin + gas
-    lens), coarsened for a sparse, huge domain to at most max(64 capacity, 2^20) cells."""
-    dom = scene.domain
-    periodic = tuple(AXES[a] in dom.periodic for a in range(3))
-    lengths = [dom.max[a] - dom.min[a] for a in range(3)]
+def neighbour_grid(lo, lengths, periodic, capacity: int, reach: float) -> Grid:
+    """The broad phase's cell grid over the domain: cells at least `reach` wide (largest
+    diameter + skin + gas lens), coarsened for a sparse, huge domain to at most
+    max(64 capacity, 2^20) cells."""
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
-    while np.prod(cells) > max(64 * len(radius), 1 << 20):
+    while np.prod(cells) > max(64 * capacity, 1 << 20):
         cells = [max(3 if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
-    return Grid(lo=tuple(dom.min), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
+    return Grid(lo=tuple(lo), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
 
 
 def neighbour_slots(num, d_max: float, d_min: float, fluid_layer: float) -> int:
@@ -196,7 +194,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     skin = num.skin * d_max
     fluid_layer = scene.heat.fluid_layer if scene.heat is not None else 0.0
     heat_reach = 0.5 * fluid_layer * d_max
-    grid = neighbour_grid(scene, radius, d_max, d_max + skin + heat_reach)
+    grid = neighbour_grid(dom.min, lengths, periodic, len(radius), d_max + skin + heat_reach)
     k = neighbour_slots(num, d_max, 2.0 * radius.min(), fluid_layer) if contacts else 1  # 1: no list is built
 
     heat_cap = thermal_limit = None
