@@ -24,7 +24,7 @@ Gas energy (finite volume, particle exchange implicit, so stable for any exchang
       = HT - H T^{n+1} + H_w (T_w - T^{n+1}) + k_g sum_f eps_f A_f (T_nb - T^n) / h_f,
 the last term Fourier conduction through the gas across interior faces (explicit, with
 `conduction`; none through walls, inlet or outlet; it needs alpha_g dt sum 1/h^2 within the
-limit `gas.gas_step_checks` enforces),
+limit `tidem.gas_limits.gas_step_checks` enforces),
 T_f on interior faces the MUSCL value T_up + phi(r) (T_up - T_far) / 2 with van Leer's limiter
 phi(r) = (r + |r|)/(1 + |r|), r = (T_down - T_up)/(T_up - T_far) (van Leer 1979; total
 variation diminishing for Courant numbers up to 0.5, the limit the gas step enforces); T_far
@@ -49,7 +49,7 @@ SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread 
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
                       tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
                       conduction: bool = False):
-    """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas`); `tube_walls`
+    """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas_fields`); `tube_walls`
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy),
     `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
     `conduction` Fourier conduction through the gas."""

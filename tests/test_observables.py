@@ -14,6 +14,7 @@ from tidem import observables as obs
 from tidem.cli import app
 from tidem.scene.errors import SceneError
 from tidem.scene.load import load
+from tidem.scene.observable_names import NEEDS
 
 runner = CliRunner()
 DOC = Path(__file__).resolve().parents[1] / "docs" / "scenes.md"
@@ -90,3 +91,7 @@ def test_every_observable_is_documented():
     text = DOC.read_text()
     missing = [name for name in obs.OBSERVABLES if not re.search(rf"\| `{name}` \|", text)]
     assert not missing, f"observables missing from docs/scenes.md: {missing}"
+
+
+def test_every_listed_name_has_a_compute_function():
+    assert list(obs.OBSERVABLES) == list(NEEDS)

@@ -1,4 +1,11 @@
-"""tidem: hot granular flows (DEM, heat, gas coupling) in Taichi."""
+"""tidem: hot granular flows (DEM, heat, gas coupling) in Taichi.
+
+Layout: this folder holds the set-up and run side (scene -> Model -> State -> Solver -> run
+loop -> outputs -> renderer); the Taichi kernels live in the top-level folder `kernels/`,
+installed as the subpackage `tidem.kernels` (pyproject.toml's package-dir), so
+`tidem.kernels.contact` is the file `kernels/contact.py`. docs/architecture.md gives the data
+flow, where each physics model lives and how to add one.
+"""
 
 import os as _os
 

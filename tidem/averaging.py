@@ -1,5 +1,6 @@
-"""Local averaging of the bed (source 3, Bartsch 2020, eq. 34-36): the control volumes of a
-scene's [averaging] table, when to sample, and the time-averaged fields written at the end.
+"""Local averaging of the bed (source 3, Bartsch 2020, eq. 34-36): when to sample the control
+volumes of a scene's [averaging] table (`tidem.scene.averaging_layout`), and the
+time-averaged fields written at the end.
 
 Control volumes: rectangular cells in the x-z plane spanning the domain's depth (y), and
 around every tube `rings` layers of `ring_width` from its surface, each cut into
@@ -19,61 +20,15 @@ particle diameter are refused (`tidem.scene.checks.averaging_checks`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from tidem.kernels.averaging import COUNT, NUM_V, VOL_T, VOL_V, VOLUME
-from tidem.scene.checks import max_diameter
 
 CELLS_CSV = "averages_cells.csv"
 RINGS_CSV = "averages_rings.csv"
 VTI = "averages.vti"
-
-
-@dataclass(frozen=True)
-class AveragingLayout:
-    """The control volumes and cadence of a scene's [averaging] table."""
-
-    lo: tuple[float, float]  # lower x and z corner of the cells [m]
-    cells: tuple[int, int]  # cells along x and z
-    size: tuple[float, float]  # cell size along x and z [m] (a whole number of cells spans the domain)
-    depth: float  # domain extent along y [m]
-    ring_width: float  # radial thickness of a ring [m]
-    rings: int
-    sectors: int
-    start: float  # first sample [s]
-    interval: float | None  # between samples [s]; None: the time-series interval
-
-    @property
-    def cell_volume(self) -> float:
-        return self.size[0] * self.depth * self.size[1]
-
-
-def cell_grid(scene) -> tuple[tuple[int, int], tuple[float, float]]:
-    """Cells along x and z and their sizes [m]: `averaging.cell_size` (default 3 of the largest
-    particle diameters) rounded so that a whole number of cells spans the domain."""
-    dom, avg = scene.domain, scene.averaging
-    wanted = avg.cell_size or (3.0 * max_diameter(scene),) * 2
-    counts, sizes = [], []
-    for a, want in zip((0, 2), wanted):
-        length = dom.max[a] - dom.min[a]
-        counts.append(max(1, round(length / want)))
-        sizes.append(length / counts[-1])
-    return tuple(counts), tuple(sizes)
-
-
-def averaging_layout(scene) -> AveragingLayout | None:
-    """The layout of the scene's [averaging] table, or None without one."""
-    avg = scene.averaging
-    if avg is None:
-        return None
-    dom = scene.domain
-    cells, size = cell_grid(scene)
-    return AveragingLayout(lo=(dom.min[0], dom.min[2]), cells=cells, size=size, depth=dom.max[1] - dom.min[1],
-                           ring_width=avg.ring_width or max_diameter(scene), rings=avg.rings,
-                           sectors=avg.ring_sectors, start=avg.start, interval=avg.interval)
 
 
 class AverageRecorder:

@@ -37,7 +37,7 @@ def profile_times(model) -> list[float]:
 
 def profile_bins(model) -> int:
     """The scene's bin count, or one bin per gas cell along z."""
-    from tidem.gas import gas_grid
+    from tidem.gas_geometry import gas_grid
 
     return model.scene.output.profile_bins or gas_grid(model.scene).cells[2]
 

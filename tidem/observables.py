@@ -4,9 +4,10 @@
 
 Each observable is one function of a `RunRecord` (the state at the end of a run and its
 time series) that returns named values, one per column (several for per-tube values); its
-docstring gives the definition and the unit. `requirement(name, scene)` says what a scene
-lacks for an observable (a heated tube, a gas phase), so that a scene asking for one it
-cannot give is refused at load time. docs/scenes.md lists the same definitions.
+docstring gives the definition and the unit. The names and what each needs of a scene (a
+heated tube, a gas phase) are listed in `tidem.scene.observable_names`, so that scene
+validation refuses a scene asking for one it cannot give without importing this module.
+docs/scenes.md lists the same definitions.
 
 "Second half" means the time-series samples with t >= t_end / 2.
 
@@ -19,7 +20,6 @@ next to the simulated mean alpha, `tidem.packet_model`).
 
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import dataclass, field
 from typing import Callable
@@ -28,8 +28,9 @@ import numpy as np
 
 from tidem.impact_conduction import hertz_impact, quasi_static_impact_heat, sun_chen_impact_heat
 from tidem.kernels import contact_laws as cl
-from tidem.model import angle_bin_area, is_heated
 from tidem.packet_model import packet_alpha
+from tidem.scene.observable_names import NEEDS
+from tidem.surfaces import angle_bin_area, is_heated
 from tidem.timestep import hertz_contact_time
 
 
@@ -90,32 +91,18 @@ def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | No
 
 Compute = Callable[[RunRecord], dict[str, float]]
 OBSERVABLES: dict[str, Compute] = {}
-_NEEDS: dict[str, Callable] = {}
 
 
-def observable(name: str, needs: Callable | None = None) -> Callable[[Compute], Compute]:
-    """Register `fn` as observable `name`; `needs(scene)` returns what the scene lacks, or None."""
+def observable(name: str) -> Callable[[Compute], Compute]:
+    """Register `fn` as observable `name`, one of the names a scene may declare
+    (`tidem.scene.observable_names`, which also says what each needs of the scene)."""
+    if name not in NEEDS:
+        raise KeyError(f"observable '{name}' is not listed in tidem.scene.observable_names")
+
     def register(fn: Compute) -> Compute:
         OBSERVABLES[name] = fn
-        if needs is not None:
-            _NEEDS[name] = needs
         return fn
     return register
-
-
-def unknown_name_message(name: str) -> str | None:
-    """None for a registered name; otherwise the error text with the closest valid name."""
-    if name in OBSERVABLES:
-        return None
-    close = difflib.get_close_matches(name, list(OBSERVABLES), n=1, cutoff=0.5)
-    hint = f"did you mean '{close[0]}'?" if close else f"valid names: {', '.join(OBSERVABLES)}"
-    return f"unknown observable '{name}'; {hint}"
-
-
-def requirement(name: str, scene) -> str | None:
-    """What `scene` lacks for observable `name` (a sentence), or None."""
-    needs = _NEEDS.get(name)
-    return needs(scene) if needs is not None else None
 
 
 def compute(names: list[str], rec: RunRecord) -> dict[str, dict[str, float]]:
@@ -133,28 +120,14 @@ def _late_mean(rec: RunRecord, column: str) -> float:
     return float(np.nanmean(rec.series[column][t >= 0.5 * t[-1]]))
 
 
-def _heated_tube(scene) -> str | None:
-    if scene.heat is None or not any(t.temperature is not None or t.heat_flux is not None for t in scene.tubes):
-        return "needs [heat] and a tube with a `temperature` or a `heat_flux`"
-    return None
-
-
-def _heat(scene) -> str | None:
-    return None if scene.heat is not None else "needs [heat]"
-
-
-def _gas(scene) -> str | None:
-    return None if scene.gas is not None else "needs [gas]"
-
-
-@observable("tube_heat", needs=_heated_tube)
+@observable("tube_heat")
 def tube_heat(rec: RunRecord) -> dict[str, float]:
     """Heat flow from each heated surface into the bed [W] (`tubes1_heat_W`, named
     after the surface), time mean over the second half of the run (timeseries.csv)."""
     return {k: _late_mean(rec, k) for k in rec.series if k.endswith("_heat_W")}
 
 
-@observable("tube_mean_alpha", needs=_heated_tube)
+@observable("tube_mean_alpha")
 def tube_mean_alpha(rec: RunRecord) -> dict[str, float]:
     """Mean heat-transfer coefficient of each heated tube [W/(m^2 K)] (`tube1_mean_alpha_W_m2K`):
     heat delivered since heat.profile_start / (time x tube area x (T_tube - heat.initial_temperature)),
@@ -191,7 +164,7 @@ def outlet_mass_flow(rec: RunRecord) -> dict[str, float]:
     return {"outlet_mass_flow_kg_s": float(np.sum(rec.mass * -rec.v[:, 2]) / h)}
 
 
-@observable("mean_temperature", needs=_heat)
+@observable("mean_temperature")
 def mean_temperature(rec: RunRecord) -> dict[str, float]:
     """Mean particle temperature at the end [K] (`mean_temperature_K`), unweighted."""
     return {"mean_temperature_K": float(rec.temperature.mean())}
@@ -221,7 +194,7 @@ def restitution(rec: RunRecord) -> dict[str, float]:
     return {"restitution": float(np.mean(-np.einsum("ij,ij->i", rec.v[moving], rec.v0[moving]) / speed2[moving]))}
 
 
-@observable("pressure_drop", needs=_gas)
+@observable("pressure_drop")
 def pressure_drop(rec: RunRecord) -> dict[str, float]:
     """Gas pressure drop across the bed [Pa] (`pressure_drop_Pa`): the distributor-level minus
     the top pressure (timeseries column gas_pressure_drop_Pa), time mean over the second half."""
@@ -235,7 +208,7 @@ def kinetic_energy(rec: RunRecord) -> dict[str, float]:
     return {"kinetic_energy_J": float(0.5 * np.sum(rec.mass * np.einsum("ij,ij->i", rec.v, rec.v)))}
 
 
-@observable("impact_heat", needs=_heat)
+@observable("impact_heat")
 def impact_heat(rec: RunRecord) -> dict[str, float]:
     """Heat passed in the head-on impacts [J] (`impact_heat_J`: mean over the particles that
     gained heat of m c (T_end - T_0)) and its mean ratios to the quasi-static Hertz integral of
@@ -249,13 +222,7 @@ def impact_heat(rec: RunRecord) -> dict[str, float]:
             "over_sun_chen": float(np.mean([r["simulated_over_sun_chen"] for r in rows]))}
 
 
-def _moving_bed_tube(scene) -> str | None:
-    if scene.outlet is None or scene.outlet.type != "moving_plate":
-        return "needs a moving_plate outlet (its speed is the bed speed)"
-    return _heated_tube(scene)
-
-
-@observable("packet_model", needs=_moving_bed_tube)
+@observable("packet_model")
 def packet_model(rec: RunRecord) -> dict[str, float]:
     """Schluender's packet model alpha of each heated tube [W/(m^2 K)]
     (`tube1_packet_alpha_W_m2K`) and the simulated mean alpha over it (`tube1_over_packet`)."""
@@ -266,12 +233,7 @@ def packet_model(rec: RunRecord) -> dict[str, float]:
     return out
 
 
-def _heat_and_gas(scene) -> str | None:
-    return None if scene.heat is not None and scene.gas is not None else \
-        "needs a [heat] and a [gas] table (a bed heated by the gas)"
-
-
-@observable("packed_bed_profiles", needs=_heat_and_gas)
+@observable("packed_bed_profiles")
 def packed_bed_profiles(rec: RunRecord) -> dict[str, float]:
     """Axial solid-temperature profiles of a fixed bed heated by the gas against Schumann's
     solution for the same bed (`tidem.bed_profiles`): the largest deviation of a bin mean

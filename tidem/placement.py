@@ -1,4 +1,5 @@
-"""Initial particle sizes and positions: size distributions, lattice fill of a region, pour sites.
+"""Initial particle sizes and positions: size distributions, lattice fill of a region, pour sites,
+the groups of a scene placed (`place_groups`), and the cell-order sort key of the broad phase.
 
 Sizes are drawn from the group's distribution with its seed (cut-offs by redrawing, not by
 clipping, so no spike at the bounds). A filled region is a simple cubic lattice of spacing
@@ -8,7 +9,11 @@ that would overlap a tube or a wall are skipped.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+
+from tidem.scene.sizes import largest_diameter
 
 
 class PlacementError(ValueError):
@@ -81,3 +86,101 @@ def clear_of_obstacles(sites: np.ndarray, radius: float, planes, tubes, lengths,
         d *= np.asarray(axis_mask)
         ok &= np.linalg.norm(d, axis=1) > (r_tube + radius) * (1 - 1e-9)
     return ok
+
+
+@dataclass
+class Placed:
+    """The particles of all groups at the start, in scene order; arrays of shape [capacity]."""
+
+    radius: np.ndarray
+    material: np.ndarray  # index into the scene's materials
+    group: np.ndarray  # index into the scene's particle groups
+    fixed: np.ndarray
+    x0: np.ndarray  # [capacity, 3]; zeros for particles still to be poured
+    v0: np.ndarray  # [capacity, 3]
+    active0: np.ndarray  # False for particles still to be poured
+    temperature0: np.ndarray | None  # None without [heat]
+    pours: list[dict]  # one per poured group, for `tidem.pour.Pourer`
+
+
+def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic) -> tuple[Placed | None, list[str]]:
+    """Sizes, positions and velocities of every particle group (given positions, a region filled
+    bottom-up, or a pour), or None and the messages of the groups that cannot be placed."""
+    dom = scene.domain
+    mat_names = list(scene.materials)
+    radius, material, group, x0, v0, active0, pours = [], [], [], [], [], [], []
+    fixed, temp0 = [], []
+    errors: list[str] = []
+    offset = 0
+    for gi, g in enumerate(scene.particles):
+        rng = np.random.default_rng(g.seed)
+        key = f"particles[{gi}]"
+        if g.positions is not None:
+            count = len(g.positions)
+        elif g.count is not None:
+            count = g.count
+        else:
+            count = None  # fill every free lattice site of the region
+        if g.region is not None:
+            spacing = 1.02 * largest_diameter(g.diameter)
+            sites = lattice_sites(g.region.min, g.region.max, spacing, g.lattice)
+            plane_geo = [(p["p0"], p["n"]) for p in planes]
+            tube_geo = [(t["c"], t["mask"], t["r"]) for t in tubes]
+            sites = sites[clear_of_obstacles(sites, 0.5 * spacing, plane_geo, tube_geo, lengths, periodic)]
+            if count is None:
+                count = len(sites)
+            if len(sites) == 0 or len(sites) < count:
+                errors.append(
+                    f"{key}: the region holds at most {len(sites)} particles of diameter {spacing / 1.02:g} m clear of "
+                    f"walls and tubes, but {count} were asked for; enlarge 'region' or lower 'count'"
+                )
+                continue
+        try:
+            d = sample_diameters(g.diameter, count, rng)
+        except PlacementError as exc:
+            errors.append(f"{key}.diameter: {exc}")
+            continue
+        if g.positions is not None:
+            pos = np.asarray(g.positions, float)
+            vel = np.asarray(g.velocities, float) if g.velocities is not None else np.tile(g.velocity, (count, 1))
+            act = np.ones(count, bool)
+        elif g.region is not None:
+            # fill bottom-up; random order within each layer
+            layer = np.unique(np.round(sites[:, 2], 9), return_inverse=True)[1]
+            order = np.lexsort((rng.random(len(sites)), layer))[:count]
+            order = order[np.argsort(spatial_key(sites[order], dom.min, 1.1 * spacing), kind="stable")]
+            pos = sites[order] + rng.uniform(-0.01, 0.01, (count, 3)) * spacing
+            vel = np.tile(g.velocity, (count, 1))
+            act = np.ones(count, bool)
+        else:
+            pos = np.zeros((count, 3))
+            vel = np.tile(g.velocity, (count, 1))
+            act = np.zeros(count, bool)
+            pours.append(dict(first=offset, count=count, region=g.pour.region, rate=g.pour.rate, start=g.pour.start,
+                              seed=g.seed, inserted=0, key=key))
+        radius.append(0.5 * d)
+        material.append(np.full(count, mat_names.index(g.material), np.int32))
+        group.append(np.full(count, gi, np.int32))
+        fixed.append(np.full(count, g.fixed))
+        if scene.heat is not None:
+            temp0.append(np.full(count, g.temperature or scene.heat.initial_temperature))
+        x0.append(pos)
+        v0.append(vel)
+        active0.append(act)
+        offset += count
+    if errors:
+        return None, errors
+    return Placed(radius=np.concatenate(radius), material=np.concatenate(material), group=np.concatenate(group),
+                  fixed=np.concatenate(fixed), x0=np.concatenate(x0), v0=np.concatenate(v0),
+                  active0=np.concatenate(active0), temperature0=np.concatenate(temp0) if scene.heat is not None else None,
+                  pours=pours), []
+
+
+def spatial_key(x: np.ndarray, lo, cell: float) -> np.ndarray:
+    """Sort key that stores particles cell by cell in the broad phase's cell order (x, then y,
+    then z): partners of a particle then sit close in memory, which makes the force loop about
+    1.5x faster than a random order."""
+    c = np.floor((x - np.asarray(lo)) / cell).astype(np.int64)
+    c -= c.min(axis=0)
+    n = c.max(axis=0) + 1
+    return (c[:, 0] * n[1] + c[:, 1]) * n[2] + c[:, 2]

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.reactions import ESCAPED, GONE, M_O2, MASS_ESCAPED, REACTED
+from tidem.reactions import ESCAPED, GONE, MASS_ESCAPED, REACTED
+from tidem.species import M_O2
 
 TRACKED = 20
 HOTTEST = 10

@@ -15,10 +15,11 @@ import numpy as np
 
 from tidem.kernels.reactions import (CHAR, ESCAPED, GONE, LATENT, MASS_ESCAPED, O2_USED, POLY,  # noqa: F401
                                      REACTED, SUBL, ENTHALPY_OUT, HEAT_RELEASED)
+from tidem.gas_geometry import gas_grid
+from tidem.species import M_O2
 
 R_GAS = 8.314462618  # J/(mol K)
 M_C = 0.012011  # kg/mol
-M_O2 = 0.031998  # kg/mol
 H_CO2 = 393.5e3  # J/mol C, C + O2 -> CO2
 H_CO = 110.5e3  # J/mol C, C + 1/2 O2 -> CO
 MAX_FRACTION = 0.01  # largest share of a particle's mass one step may consume or add
@@ -26,11 +27,6 @@ MAX_FRACTION = 0.01  # largest share of a particle's mass one step may consume o
 KIND_IDS = {"char_combustion": CHAR, "polymerization": POLY, "sublimation": SUBL}
 
 N_SUMS = 9  # S.rsum slots, named in kernels/reactions.py
-
-
-def o2_mass_fraction(mole_fraction: float, molar_mass: float) -> float:
-    """Y_O2 = x_O2 M_O2 / M_gas (mean molar mass of the gas held constant)."""
-    return mole_fraction * M_O2 / molar_mass
 
 
 def reaction_constants(scene) -> list[dict]:
@@ -110,8 +106,6 @@ def reaction_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarr
             errs.append(f"{key}: a step of {dt:.3g} s {what} up to {100 * per_s * dt:.2g} % of the smallest particle's "
                         f"mass (limit {100 * MAX_FRACTION:g} %); use numerics.dt <= {MAX_FRACTION / per_s:.3g}")
     if gas is not None and gas.oxygen is not None:
-        from tidem.gas import gas_grid
-
         h = gas_grid(scene).h
         dt_gas = gas.coupling_interval * dt
         number = gas.oxygen.diffusivity * dt_gas * sum(1 / v**2 for v in h)

@@ -26,12 +26,13 @@ from tidem.kernels.diagnostics import make_energy_kernel
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.outlet import make_recycle_kernel
 from tidem.gas import GasError, GasPhase
-from tidem.model import Model, is_heated
+from tidem.model import Model
 from tidem.phases import PhaseTimer, clock
 from tidem.pour import Pourer
 from tidem.runtime import hot
 from tidem.state import State, allocate
 from tidem.storage_order import SORT_MIN_PARTICLES, sort_storage
+from tidem.surfaces import is_heated
 
 
 class RunError(RuntimeError):
@@ -52,13 +53,36 @@ class Solver:
         self.model = model
         self.state: State = allocate(model)
         f = model.features
-        S = self.state
         self.n = model.capacity
         self.dt = model.dt
         self.t = 0.0
         self.steps = 0
         self.rebuilds = 0
         self.timer = PhaseTimer()  # seconds per phase of the step (run.json's profile)
+        forces = self._build_contacts()
+        self.gas = None
+        if f.gas:
+            self.gas = GasPhase(model, self.state, ti.f64 if f.precision == "float64" else ti.f32, self.timer)
+        self._build_integrators(forces)
+        self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
+        self._energies = make_energy_kernel(model.gravity, self.state)
+        self._build_sources_and_sinks()
+        self._average = None
+        if f.averaging:
+            a = model.averaging
+            self._average = make_averaging_kernel(model.grid, a.lo, a.cells, a.size, f.n_tubes, a.rings, a.ring_width,
+                                                  a.sectors, f.heat, self.state)
+        self._check_every = model.scene.numerics.check_interval
+        # scenes whose outputs follow particles by storage index (pours, reactions, contact timing) keep their
+        # order, and so do small ones, which fit in cache whatever their order
+        sortable = f.contacts and self.n >= SORT_MIN_PARTICLES and not (model.pours or f.reactions or f.contact_time)
+        self._sort_every = model.scene.numerics.sort_interval if sortable else 0
+        self.start()
+
+    def _build_contacts(self):
+        """The neighbour builder (none without contacts) and the force kernels (`kernels/contact.py`:
+        contact law, walls and tubes, heat conduction and radiation in the same pair loop)."""
+        model, f, S = self.model, self.model.features, self.state
         self._rebuild = None
         if f.contacts:
             self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
@@ -69,22 +93,27 @@ class Solver:
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
                                    model.skin + model.heat_reach)
         self._mark_near = forces.mark_near
-        self.gas = None
-        if f.gas:
-            self.gas = GasPhase(model, S, ti.f64 if f.precision == "float64" else ti.f32, self.timer)
-        # Without reactions (which act between the forces and the kick) the kick kernel also
-        # runs the partner pass of the contact forces and adds the gas forces: one launch less each.
+        return forces
+
+    def _build_integrators(self, forces) -> None:
+        """Kick-drift and kick (`kernels/integrate.py`). Without reactions (which act between the
+        forces and the kick) the kick kernel also runs the partner pass of the contact forces and
+        adds the gas forces: one launch less each."""
+        model, f = self.model, self.model.features
         self._fused = not f.reactions
         self._own_forces = hot(forces.own)
         self._partner_forces = forces.partner if self._fused or forces.partner is None else hot(forces.partner)
         finish = ()
         if self._fused:
             finish = ((forces.gather,) if f.contacts else ()) + ((self.gas.force,) if self.gas else ())
-        self._kick_drift, self._kick = map(hot, make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes,
+        self._kick_drift, self._kick = map(hot, make_integrators(model.grid, self.state, f.heat, f.n_planes + f.n_tubes,
                                                                  model.angle_bins, f.foil, f.growth, f.wall_foil,
                                                                  f.n_planes, finish))
-        self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
-        self._energies = make_energy_kernel(model.gravity, S)
+
+    def _build_sources_and_sinks(self) -> None:
+        """Outlet recycling (`kernels/outlet.py`), pours (`tidem.pour`) and reactions
+        (`kernels/reactions.py`, coupled to the gas grid when there is one)."""
+        model, f, S = self.model, self.model.features, self.state
         self._recycle = None
         if f.recycle:
             o = model.scene.outlet
@@ -97,17 +126,6 @@ class Solver:
             self._react = make_reaction_kernel(model.reaction_constants, S, self.gas.gg if G else None, G,
                                                gas.density if gas else 1.0, gas.viscosity if gas else 1.0,
                                                model.wall_slots)
-        self._average = None
-        if f.averaging:
-            a = model.averaging
-            self._average = make_averaging_kernel(model.grid, a.lo, a.cells, a.size, f.n_tubes, a.rings, a.ring_width,
-                                                  a.sectors, f.heat, S)
-        self._check_every = model.scene.numerics.check_interval
-        # scenes whose outputs follow particles by storage index (pours, reactions, contact timing) keep their
-        # order, and so do small ones, which fit in cache whatever their order
-        sortable = f.contacts and self.n >= SORT_MIN_PARTICLES and not (model.pours or f.reactions or f.contact_time)
-        self._sort_every = model.scene.numerics.sort_interval if sortable else 0
-        self.start()
 
     def start(self) -> None:
         """First neighbour build and force evaluation (so that step() can begin with a kick)."""

@@ -52,7 +52,10 @@ import numpy as np
 import taichi as ti
 
 from tidem.kernels import contact_laws as cl
-from tidem.model import Model, angle_bin_area
+from tidem.kernels.averaging import channels
+from tidem.model import Model
+from tidem.reactions import N_SUMS
+from tidem.surfaces import angle_bin_area
 
 
 class State(SimpleNamespace):
@@ -82,123 +85,166 @@ def wall_foil_vector(plane: dict, model: Model) -> list[float]:
     return [plane["flux"], plane["foil_C"], area]
 
 
-def allocate(model: Model) -> State:
-    """Allocate and fill every field the model's features need."""
-    fp = ti.f64 if model.features.precision == "float64" else ti.f32
-    N, K, W = model.capacity, model.max_neighbors, model.wall_slots
-    feat = model.features
-    fb = ti.FieldsBuilder()
-    S = State()
+class _Placer:
+    """Places fields of one SNode tree on a State and keeps the names of those indexed by
+    particle first (`S.particle_fields`, permuted by a storage sort)."""
 
-    def make(name, dtype=fp, n=None):
+    def __init__(self, S: State, fp):
+        self.S, self.fp, self.fb = S, fp, ti.FieldsBuilder()
+        S.particle_fields = []
+
+    def make(self, name, dtype=None, n=None):
+        dtype = self.fp if dtype is None else dtype
         fld = ti.field(dtype) if n is None else ti.Vector.field(n, dtype)
-        setattr(S, name, fld)
+        setattr(self.S, name, fld)
         return fld
 
-    def place(shape, name, dtype=fp, n=None):
-        fb.dense(ti.ij if len(shape) == 2 else ti.i, shape).place(make(name, dtype, n))
+    def place(self, shape, name, dtype=None, n=None):
+        self.fb.dense(ti.ij if len(shape) == 2 else ti.i, shape).place(self.make(name, dtype, n))
 
-    S.particle_fields = []  # names of the fields indexed by particle first (permuted by a storage sort)
+    def per_particle(self, shape, name, dtype=None, n=None):
+        self.place(shape, name, dtype, n)
+        self.S.particle_fields.append(name)
 
-    def per_particle(shape, name, dtype=fp, n=None):
-        place(shape, name, dtype, n)
-        S.particle_fields.append(name)
 
+def _place_contact_fields(p: _Placer, model: Model) -> None:
+    """Particles, neighbour list and wall slots with their contact history, the broad phase's
+    cells, the material-pair and material-surface tables, planes and tubes."""
+    N, K, W = model.capacity, model.max_neighbors, model.wall_slots
+    feat = model.features
     # What the pair loop reads of a partner sits together in memory (array of structs).
-    hot = [make(k, n=3) for k in ("x", "v", "w")] + [make("radius"), make("mass"), make("mat", ti.i32)]
-    fb.dense(ti.i, N).place(*hot)
-    S.particle_fields += ["x", "v", "w", "radius", "mass", "mat"]
-    per_particle((N,), "ident", ti.i32)
+    hot = [p.make(k, n=3) for k in ("x", "v", "w")] + [p.make("radius"), p.make("mass"), p.make("mat", ti.i32)]
+    p.fb.dense(ti.i, N).place(*hot)
+    p.S.particle_fields += ["x", "v", "w", "radius", "mass", "mat"]
+    p.per_particle((N,), "ident", ti.i32)
     if feat.growth:
-        per_particle((N,), "r_build")
+        p.per_particle((N,), "r_build")
     for name in ("f", "tq", "x_build"):
-        per_particle((N,), name, n=3)
+        p.per_particle((N,), name, n=3)
     for name in ("inv_mass", "inv_inertia", "ovl"):
-        per_particle((N,), name)
+        p.per_particle((N,), name)
     for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask", "near"):
-        per_particle((N,), name, ti.i32)
+        p.per_particle((N,), name, ti.i32)
     if feat.contact_time:
-        per_particle((N,), "touch_start")
-        per_particle((N,), "touch_end")
+        p.per_particle((N,), "touch_start")
+        p.per_particle((N,), "touch_end")
     for name in ("nbr", "nbr_new", "src"):
-        per_particle((N, K), name, ti.i32)
-    per_particle((N, K), "ft", n=3)
-    per_particle((N, W), "wid", ti.i32)
-    per_particle((N, W), "wft", n=3)
+        p.per_particle((N, K), name, ti.i32)
+    p.per_particle((N, K), "ft", n=3)
+    p.per_particle((N, W), "wid", ti.i32)
+    p.per_particle((N, W), "wft", n=3)
     if feat.rolling:
-        per_particle((N, K), "mr", n=3)
-        per_particle((N, W), "wmr", n=3)
+        p.per_particle((N, K), "mr", n=3)
+        p.per_particle((N, W), "wmr", n=3)
     if feat.hysteretic:
-        per_particle((N, K), "dmax")
-        per_particle((N, W), "wdmax")
+        p.per_particle((N, K), "dmax")
+        p.per_particle((N, W), "wdmax")
     nc = model.grid.n_cells
     for name in ("cell_count", "cell_start", "cell_fill"):
-        place((nc,), name, ti.i32)
+        p.place((nc,), name, ti.i32)
     P = model.pair_params.shape[0]
-    place((P, P), "pp", n=cl.N_PARAMS)
-    place((P, model.surface_params.shape[1]), "ps", n=cl.N_PARAMS)
+    p.place((P, P), "pp", n=cl.N_PARAMS)
+    p.place((P, model.surface_params.shape[1]), "ps", n=cl.N_PARAMS)
     NP = max(len(model.planes), 1)
     NT = max(len(model.tubes), 1)
     for name in ("plane_p0", "plane_n", "plane_vel"):
-        place((NP,), name, n=3)
-    place((NP,), "plane_t", n=2)
-    place((NT,), "tube_c", n=3)
-    place((NT,), "tube_mask", n=3)
-    place((NT,), "tube_r")
-    S.max_disp = ti.field(fp)
-    fb.place(S.max_disp)
+        p.place((NP,), name, n=3)
+    p.place((NP,), "plane_t", n=2)
+    p.place((NT,), "tube_c", n=3)
+    p.place((NT,), "tube_mask", n=3)
+    p.place((NT,), "tube_r")
+    p.S.max_disp = ti.field(p.fp)
+    p.fb.place(p.S.max_disp)
+
+
+def _place_heat_fields(p: _Placer, model: Model) -> None:
+    """Particle temperatures and heat rates, heated surfaces, angle bins and heated foils."""
+    N, K = model.capacity, model.max_neighbors
+    feat = model.features
+    for name in ("T", "q", "inv_heat_cap"):
+        p.per_particle((N,), name)
+    if feat.contacts:
+        p.per_particle((N, K), "qpair")
+    NS = max(len(model.planes) + len(model.tubes), 1)
+    p.place((NS,), "surf_T")
+    p.place((NS,), "surf_rate")
+    p.place((NS,), "surf_energy", ti.f64)
+    n_tubes, bins = len(model.tubes), model.angle_bins
+    if bins:
+        p.place((n_tubes, bins), "tube_bin_rate")
+        p.place((n_tubes, bins), "tube_bin_energy", ti.f64)
+        p.place((n_tubes,), "tube_side", n=3)
+    if feat.wall_foil:
+        p.place((len(model.planes),), "plane_foil", n=3)
+        p.place((len(model.planes),), "plane_foil_T")
+    if feat.foil:
+        p.place((n_tubes,), "tube_foil", n=4)
+        p.place((n_tubes, bins), "tube_bin_T")
+        p.place((n_tubes, bins), "tube_bin_dT")
+        p.place((n_tubes, bins), "tube_bin_Tsum", ti.f64)
+
+
+def _place_gas_fields(p: _Placer, model: Model) -> None:
+    """The gas state at each particle (the gas grid's own fields: `tidem.gas_fields`)."""
+    N = model.capacity
+    for name in ("gK", "geps"):
+        p.per_particle((N,), name)
+    for name in ("gu", "ggp"):
+        p.per_particle((N,), name, n=3)
+    if model.features.heat:
+        for name in ("gH", "gT"):
+            p.per_particle((N,), name)
+    if model.features.species:
+        p.per_particle((N,), "gY")
+
+
+def _place_reaction_fields(p: _Placer, model: Model) -> None:
+    N = model.capacity
+    p.per_particle((N,), "rx", ti.i32)
+    p.place((N_SUMS,), "rsum", ti.f64)
+    if "sublimation" in model.features.reactions:
+        p.per_particle((N,), "rt0")
+        p.per_particle((N,), "rt1")
+
+
+def _place_averaging_fields(p: _Placer, model: Model) -> None:
+    a, C = model.averaging, channels(model.features.heat)
+    p.fb.dense(ti.ijk, (*a.cells, C)).place(p.make("avg_cells", ti.f64))
+    if model.tubes:
+        p.fb.dense(ti.ijk, (len(model.tubes) * a.rings, a.sectors, C)).place(p.make("avg_rings", ti.f64))
+    p.S.avg_samples = ti.field(ti.i32)
+    p.fb.place(p.S.avg_samples)
+
+
+def allocate(model: Model) -> State:
+    """Allocate every field the model's features need and fill it from the Model."""
+    fp = ti.f64 if model.features.precision == "float64" else ti.f32
+    feat = model.features
+    S = State()
+    p = _Placer(S, fp)
+    _place_contact_fields(p, model)
     if feat.heat:
-        for name in ("T", "q", "inv_heat_cap"):
-            per_particle((N,), name)
-        if feat.contacts:
-            per_particle((N, K), "qpair")
-        NS = max(len(model.planes) + len(model.tubes), 1)
-        place((NS,), "surf_T")
-        place((NS,), "surf_rate")
-        place((NS,), "surf_energy", ti.f64)
-        if model.angle_bins:
-            place((len(model.tubes), model.angle_bins), "tube_bin_rate")
-            place((len(model.tubes), model.angle_bins), "tube_bin_energy", ti.f64)
-            place((len(model.tubes),), "tube_side", n=3)
-        if feat.wall_foil:
-            place((len(model.planes),), "plane_foil", n=3)
-            place((len(model.planes),), "plane_foil_T")
-        if feat.foil:
-            place((len(model.tubes),), "tube_foil", n=4)
-            place((len(model.tubes), model.angle_bins), "tube_bin_T")
-            place((len(model.tubes), model.angle_bins), "tube_bin_dT")
-            place((len(model.tubes), model.angle_bins), "tube_bin_Tsum", ti.f64)
+        _place_heat_fields(p, model)
     if feat.gas:
-        for name in ("gK", "geps"):
-            per_particle((N,), name)
-        for name in ("gu", "ggp"):
-            per_particle((N,), name, n=3)
-        if feat.heat:
-            for name in ("gH", "gT"):
-                per_particle((N,), name)
-        if feat.species:
-            per_particle((N,), "gY")
+        _place_gas_fields(p, model)
     if feat.reactions:
-        from tidem.reactions import N_SUMS
-
-        per_particle((N,), "rx", ti.i32)
-        place((N_SUMS,), "rsum", ti.f64)
-        if "sublimation" in feat.reactions:
-            per_particle((N,), "rt0")
-            per_particle((N,), "rt1")
+        _place_reaction_fields(p, model)
     if feat.averaging:
-        from tidem.kernels.averaging import channels
+        _place_averaging_fields(p, model)
+    p.place((2,), "overflow", ti.i32)
+    p.place((5,), "sums")
+    S._tree = p.fb.finalize()
+    _fill_particles(S, model)
+    if feat.heat:
+        _fill_heat(S, model)
+    _fill_surfaces(S, model)
+    return S
 
-        a, C = model.averaging, channels(feat.heat)
-        fb.dense(ti.ijk, (*a.cells, C)).place(make("avg_cells", ti.f64))
-        if model.tubes:
-            fb.dense(ti.ijk, (len(model.tubes) * a.rings, a.sectors, C)).place(make("avg_rings", ti.f64))
-        S.avg_samples = ti.field(ti.i32)
-        fb.place(S.avg_samples)
-    place((2,), "overflow", ti.i32)
-    place((5,), "sums")
-    S._tree = fb.finalize()
 
+def _fill_particles(S: State, model: Model) -> None:
+    """Start positions, velocities and sizes; fixed particles get zero inverse mass and inertia."""
+    feat = model.features
+    N = model.capacity
     radius = model.radius
     inertia = 0.4 * model.mass * radius**2
     movable = ~model.fixed  # fixed particles: zero inverse mass and inertia, zero velocity
@@ -211,21 +257,6 @@ def allocate(model: Model) -> State:
     S.mass.from_numpy(model.mass)
     S.inv_mass.from_numpy(movable / model.mass)
     S.inv_inertia.from_numpy(movable / inertia)
-    if feat.heat:
-        S.T.from_numpy(model.temperature0)
-        S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
-        T0 = model.scene.heat.initial_temperature  # a foil's own temperature is in tube_bin_T
-        temps = [T0 if s.get("flux") is not None else s["T"] for s in model.planes + model.tubes]
-        S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
-        if feat.foil:
-            S.tube_foil.from_numpy(np.array([foil_vector(t, model) for t in model.tubes]))
-            S.tube_bin_T.fill(T0)
-        if feat.wall_foil:
-            S.plane_foil.from_numpy(np.array([wall_foil_vector(p, model) for p in model.planes]))
-            S.plane_foil_T.fill(T0)
-        if model.angle_bins:
-            S.tube_side.from_numpy(np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0]
-                                             for t in model.tubes]))
     S.mat.from_numpy(model.material)
     if feat.reactions:
         S.rx.from_numpy(model.reaction_index)
@@ -238,6 +269,29 @@ def allocate(model: Model) -> State:
     if feat.contact_time:
         S.touch_start.fill(-1.0)
         S.touch_end.fill(-1.0)
+
+
+def _fill_heat(S: State, model: Model) -> None:
+    """Start temperatures, 1/(m c), fixed surface temperatures, foils and the tubes' side vectors."""
+    feat = model.features
+    S.T.from_numpy(model.temperature0)
+    S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
+    T0 = model.scene.heat.initial_temperature  # a foil's own temperature is in tube_bin_T
+    temps = [T0 if s.get("flux") is not None else s["T"] for s in model.planes + model.tubes]
+    S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
+    if feat.foil:
+        S.tube_foil.from_numpy(np.array([foil_vector(t, model) for t in model.tubes]))
+        S.tube_bin_T.fill(T0)
+    if feat.wall_foil:
+        S.plane_foil.from_numpy(np.array([wall_foil_vector(p, model) for p in model.planes]))
+        S.plane_foil_T.fill(T0)
+    if model.angle_bins:
+        S.tube_side.from_numpy(np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0]
+                                         for t in model.tubes]))
+
+
+def _fill_surfaces(S: State, model: Model) -> None:
+    """The parameter tables and the geometry of planes and tubes."""
     S.pp.from_numpy(model.pair_params)
     S.ps.from_numpy(model.surface_params)
     if model.planes:
@@ -249,4 +303,3 @@ def allocate(model: Model) -> State:
         S.tube_c.from_numpy(np.array([t["c"] for t in model.tubes], float))
         S.tube_mask.from_numpy(np.array([t["mask"] for t in model.tubes], float))
         S.tube_r.from_numpy(np.array([t["r"] for t in model.tubes], float))
-    return S

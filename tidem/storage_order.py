@@ -1,7 +1,7 @@
 """Storage order: the particles re-sorted into cell order as the bed flows (as LAMMPS' atom
 sorting does), so that partners that sit close in space sit close in memory.
 
-Fills and benchmark beds start in cell order (`tidem.model.spatial_key`), but a flowing or
+Fills and benchmark beds start in cell order (`tidem.placement.spatial_key`), but a flowing or
 bubbling bed mixes within seconds of bed time and the force and neighbour loops then read
 their partners from all over memory. Every `numerics.sort_interval` neighbour rebuilds the
 Solver calls `sort_storage` right before the rebuild (in scenes of at least
@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tidem.model import spatial_key
+from tidem.placement import spatial_key
 
 SORT_MIN_PARTICLES = 1024  # smaller scenes fit in cache in any order and keep theirs
 ROW_FIELDS = ("nbr", "ft", "mr", "dmax", "qpair")  # [capacity, K] fields that follow their row's order

@@ -3,26 +3,9 @@
 from __future__ import annotations
 
 from tidem.scene.schema import Scene
+from tidem.scene.sizes import largest_diameter, max_diameter
 
 AXES = "xyz"
-
-
-def largest_diameter(dist) -> float:
-    """Largest diameter a size distribution can produce [m]: its cut-off (an open normal or
-    log-normal, allowed only with zero spread, gives its mean or median)."""
-    if dist.distribution == "mono":
-        return dist.value
-    if dist.distribution == "uniform":
-        return dist.max
-    if dist.max is not None:
-        return dist.max
-    return dist.mean if dist.distribution == "normal" else dist.median
-
-
-def max_diameter(scene: Scene) -> float:
-    """Largest particle diameter the scene can produce [m], growing particles at their cap."""
-    grown = [r.max_diameter for r in scene.reactions if r.type == "polymerization" and r.growth]
-    return max([largest_diameter(g.diameter) for g in scene.particles] + grown)
 
 
 def heat_checks(scene: Scene) -> list[str]:
@@ -105,7 +88,7 @@ def gas_checks(scene: Scene) -> list[str]:
 
 def observable_checks(scene: Scene) -> list[str]:
     """Observables the scene cannot give (e.g. pressure_drop without [gas])."""
-    from tidem.observables import requirement
+    from tidem.scene.observable_names import requirement
 
     return [f"observables: '{name}' {need}" for name in scene.observables if (need := requirement(name, scene))]
 
@@ -195,7 +178,7 @@ def averaging_checks(scene: Scene) -> list[str]:
     avg = scene.averaging
     if avg is None:
         return []
-    from tidem.averaging import cell_grid
+    from tidem.scene.averaging_layout import cell_grid
 
     errs: list[str] = []
     dmax = max_diameter(scene)

@@ -406,7 +406,7 @@ class Scene(Strict):
     @field_validator("observables")
     @classmethod
     def _known_observables(cls, names: list[str]) -> list[str]:
-        from tidem.observables import unknown_name_message
+        from tidem.scene.observable_names import unknown_name_message
 
         problems = [m for m in map(unknown_name_message, names) if m]
         if len(set(names)) != len(names):

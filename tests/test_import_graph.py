@@ -1,0 +1,98 @@
+"""The package's import graph (read with ast, nothing imported or compiled): no module imports
+itself back through others, scene validation (tidem/scene/) stands on nothing above it, and
+the kernels (kernels/, installed as tidem.kernels) import nothing of tidem outside kernels/.
+
+Imports inside functions count like those at the top of a module: a lazy import only moves
+the moment a cycle bites, it does not take the dependency away."""
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = {"tidem": ROOT / "tidem", "tidem.kernels": ROOT / "kernels"}
+
+
+def modules() -> dict[str, Path]:
+    """{dotted module name: file} for every module of the package, kernels included."""
+    out = {}
+    for package, folder in PACKAGES.items():
+        for path in folder.rglob("*.py"):
+            parts = list(path.relative_to(folder).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts.pop()
+            out[".".join([package, *parts])] = path
+    return out
+
+
+def imported(name: str, path: Path, known: set[str]) -> set[str]:
+    """The package's modules that module `name` imports, anywhere in its file."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+                base = f"{anchor}.{base}" if base else anchor
+            # `from tidem.kernels import contact_laws` imports a module, `from tidem.model import Model` a name
+            targets = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base for alias in node.names]
+        else:
+            continue
+        found |= {t for t in targets if t in known and t != name}
+    return found
+
+
+def import_graph() -> dict[str, set[str]]:
+    files = modules()
+    return {name: imported(name, path, set(files)) for name, path in files.items()}
+
+
+def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One import cycle as a list of modules (first = last), or None."""
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        path.append(node)
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                return path[path.index(nxt):] + [nxt]
+            if nxt not in state and (cycle := visit(nxt)):
+                return cycle
+        path.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (cycle := visit(node)):
+            return cycle
+    return None
+
+
+def test_no_import_cycles():
+    cycle = find_cycle(import_graph())
+    assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+def test_scene_validation_imports_nothing_above_it():
+    graph = import_graph()
+    upward = {f"{m} -> {t}" for m, ts in graph.items() if m.startswith("tidem.scene.")
+              for t in ts if not t.startswith("tidem.scene.")}
+    assert not upward, f"tidem/scene/ imports from outside tidem/scene/: {sorted(upward)}"
+
+
+def test_kernels_import_only_kernels():
+    graph = import_graph()
+    upward = {f"{m} -> {t}" for m, ts in graph.items() if m.startswith("tidem.kernels")
+              for t in ts if not t.startswith("tidem.kernels")}
+    assert not upward, f"kernels/ imports from tidem outside kernels/: {sorted(upward)}"
+
+
+def test_the_graph_sees_lazy_and_relative_imports():
+    graph = import_graph()
+    assert "tidem.scene.observable_names" in graph["tidem.scene.schema"]  # inside a validator
+    assert "tidem.kernels.geometry" in graph["tidem.kernels.broadphase"]  # `from .geometry import`
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]

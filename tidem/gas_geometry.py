@@ -1,0 +1,114 @@
+"""The gas grid of a scene's `[gas]` table, set-up side (plain numpy; the grid's index maths is
+`kernels/gas_grid.py`): cells of about `gas.cell_size`, the cells inside tubes (walls for the
+gas), the kind of every face (closed, interior, inlet at the bottom, outlet at the top), the
+inlet velocity of each bottom face, and the tube surface each cell borders (gas-tube
+convection).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET
+from tidem.kernels.gas_grid import GasGrid
+
+
+def gas_grid(scene) -> GasGrid:
+    """Cells of about `gas.cell_size` (a whole number per axis) over the domain."""
+    dom = scene.domain
+    cells, h = [], []
+    for a in range(3):
+        length = dom.max[a] - dom.min[a]
+        n = max(1, int(round(length / scene.gas.cell_size)))
+        cells.append(n)
+        h.append(length / n)
+    periodic = tuple("xyz"[a] in dom.periodic for a in range(3))
+    return GasGrid(lo=tuple(dom.min), cells=tuple(cells), h=tuple(h), periodic=periodic)
+
+
+def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
+    """1 for cells whose centre lies inside a tube (wall for the gas)."""
+    idx = np.indices(gg.cells).reshape(3, -1).T
+    centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
+    solid = np.zeros(len(idx), np.int32)
+    for t in tubes:
+        d = (centres - np.asarray(t["c"])) * np.asarray(t["mask"])
+        solid |= (np.einsum("ij,ij->i", d, d) < t["r"] ** 2).astype(np.int32)
+    return solid.reshape(gg.cells)
+
+
+def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
+    """Per cell, the surface of a heated tube that the cell borders, for gas-tube convection:
+    wall_A [m^2] (the faces it shares with that tube's solid cells, scaled so that each tube's
+    cells add up to pi D L), wall_T [K], wall_D [m] and wall_k (tube index); None when no
+    heated tube has solid cells."""
+    idx = np.indices(gg.cells).reshape(3, -1).T
+    centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
+    face_area = [gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]]
+    area = np.zeros(gg.cells)
+    out = {"wall_T": np.zeros(gg.cells), "wall_D": np.ones(gg.cells), "wall_k": np.zeros(gg.cells, np.int32)}
+    for k, t in enumerate(tubes):
+        if t["T"] is None:
+            continue
+        d = (centres - np.asarray(t["c"])) * np.asarray(t["mask"])
+        inside = (np.einsum("ij,ij->i", d, d) < t["r"] ** 2).reshape(gg.cells)
+        if not inside.any():
+            continue
+        borders = np.zeros(gg.cells)
+        for a in range(3):
+            for shift in (1, -1):
+                nb = np.roll(inside, shift, axis=a)
+                if not gg.periodic[a]:  # no wrap-around on open axes
+                    edge = [slice(None)] * 3
+                    edge[a] = 0 if shift == 1 else -1
+                    nb[tuple(edge)] = False
+                borders += (nb & ~inside) * face_area[a]
+        axis = int(np.flatnonzero(np.asarray(t["mask"]) == 0.0)[0])
+        true_area = 2 * np.pi * t["r"] * gg.cells[axis] * gg.h[axis]
+        mine = borders > 0
+        area[mine] += borders[mine] * true_area / borders.sum()
+        out["wall_T"][mine], out["wall_D"][mine], out["wall_k"][mine] = t["T"], 2 * t["r"], k
+    if not area.any():
+        return None
+    out["wall_A"] = area
+    return out
+
+
+def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:
+    """Per face component: CLOSED, INTERIOR, INLET (bottom) or OUTLET (top)."""
+    kinds = []
+    for c in range(3):
+        shape = gg.face_shape(c)
+        kind = np.full(shape, INTERIOR, np.int32)
+        idx = np.indices(shape)
+        below = [idx[a] - (1 if a == c else 0) for a in range(3)]
+        above = [idx[a] for a in range(3)]
+        for cell in (below, above):
+            i = [np.mod(cell[a], gg.cells[a]) if gg.periodic[a] else np.clip(cell[a], 0, gg.cells[a] - 1)
+                 for a in range(3)]
+            kind[solid[i[0], i[1], i[2]] == 1] = CLOSED
+        if not gg.periodic[c]:
+            lo_face = kind[tuple(0 if a == c else slice(None) for a in range(3))]  # views
+            hi_face = kind[tuple(gg.cells[c] if a == c else slice(None) for a in range(3))]
+            if c == 2:
+                lo_face[lo_face != CLOSED] = INLET
+                hi_face[hi_face != CLOSED] = OUTLET
+            else:
+                lo_face[:] = CLOSED
+                hi_face[:] = CLOSED
+        kinds.append(kind)
+    return kinds
+
+
+def inlet_map(gg: GasGrid, gas) -> np.ndarray:
+    """Superficial inlet velocity [m/s] of each bottom face (nozzles override the background)."""
+    xc = gg.lo[0] + (np.arange(gg.cells[0]) + 0.5) * gg.h[0]
+    yc = gg.lo[1] + (np.arange(gg.cells[1]) + 0.5) * gg.h[1]
+    X, Y = np.meshgrid(xc, yc, indexing="ij")
+    u = np.full(X.shape, gas.inlet_velocity)
+    for nz in gas.nozzles:
+        inside = (X >= nz.x[0]) & (X <= nz.x[1])
+        if nz.y is not None:
+            inside &= (Y >= nz.y[0]) & (Y <= nz.y[1])
+        u[inside] = nz.velocity
+    return u

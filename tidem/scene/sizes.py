@@ -1,0 +1,23 @@
+"""Particle sizes a validated scene can produce, for checks and set-up alike."""
+
+from __future__ import annotations
+
+from tidem.scene.schema import Scene
+
+
+def largest_diameter(dist) -> float:
+    """Largest diameter a size distribution can produce [m]: its cut-off (an open normal or
+    log-normal, allowed only with zero spread, gives its mean or median)."""
+    if dist.distribution == "mono":
+        return dist.value
+    if dist.distribution == "uniform":
+        return dist.max
+    if dist.max is not None:
+        return dist.max
+    return dist.mean if dist.distribution == "normal" else dist.median
+
+
+def max_diameter(scene: Scene) -> float:
+    """Largest particle diameter the scene can produce [m], growing particles at their cap."""
+    grown = [r.max_diameter for r in scene.reactions if r.type == "polymerization" and r.growth]
+    return max([largest_diameter(g.diameter) for g in scene.particles] + grown)
