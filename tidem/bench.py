@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.model import peak_resident_bytes, spatial_key
+from tidem.memory import peak_resident_bytes
+from tidem.model import spatial_key
 
 BED = Path(__file__).resolve().parent.parent / "benchmarks" / "bed10k.npz"
 TILES = {10000: (1, 1), 50000: (5, 1), 200000: (5, 4), 1000000: (10, 10)}

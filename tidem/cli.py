@@ -255,6 +255,8 @@ def check(
     set_: Sets = None,
 ):
     """Validate a scene and print its derived numbers (particles, time steps, kernels, memory)."""
+    from tidem.memory import format_bytes
+
     loaded = _load(path, set_)
     model = _model(loaded)
     f = model.features
@@ -271,8 +273,8 @@ def check(
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
         f"kernels: {', '.join(f.kernels())}",
-        f"memory (fields): {model.memory_bytes() / 2**20:.1f} MiB, {model.memory_bytes() / model.capacity:.0f} B/particle; "
-        f"expected peak of a run {model.peak_memory_bytes() / 2**20:.0f} MiB",
+        f"memory (fields): {format_bytes(model.memory_bytes())}, {model.memory_bytes() / model.capacity:.0f} B/particle; "
+        f"expected peak of a run {format_bytes(model.peak_memory_bytes())}",
     ]
     typer.echo("\n".join(lines))
 

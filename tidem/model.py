@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from tidem.averaging import AveragingLayout, averaging_layout
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.geometry import Grid
+from tidem.memory import HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, field_bytes, memory_refusal, scene_refusal
 from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
 from tidem.scene.checks import largest_diameter, max_diameter
 from tidem.scene.errors import SceneError
@@ -138,77 +138,13 @@ class Model:
 
     def memory_bytes(self) -> int:
         """Expected memory of the Taichi fields [bytes] (see `tidem.state.State`)."""
-        fp = 8 if self.features.precision == "float64" else 4
-        k, w = self.max_neighbors, self.wall_slots
-        per = fp * (3 * 7 + 6) + 4 * 8  # vectors x v w f tq x_build + scalars; ints
-        per += k * (4 * 3 + 3 * fp)  # nbr, nbr_new, src, ft
-        per += w * (4 + 3 * fp)
-        if self.features.rolling:
-            per += 3 * fp * (k + w)
-        if self.features.hysteretic:
-            per += fp * (k + w)
-        if self.features.heat:
-            per += 3 * fp + (k * fp if self.features.contacts else 0)  # T, q, 1/(m c); qpair
-        if self.features.gas:
-            per += fp * (8 + (2 if self.features.heat else 0) + self.features.species)
-        if self.features.reactions:
-            per += 4 + 2 * fp
-        cells = self.grid.n_cells * 4 * 3
-        if self.features.gas:
-            from tidem.gas import gas_grid
-
-            gas_cells = int(np.prod(gas_grid(self.scene).cells))
-            cells += gas_cells * (fp * (9 + 4 * self.features.heat + 8 * 3 + bool(self.features.reactions)
-                                        + 3 * self.features.species) + 4 * 4)
-        return per * self.capacity + cells
+        return field_bytes(self)
 
     def peak_memory_bytes(self) -> int:
         """Expected peak resident memory of a run [bytes]: the Python + Taichi + LLVM runtime,
         the Taichi fields, and the host copies of per-particle arrays (scene arrays, snapshot
         and check read-backs); constants measured on 20k and 126k particle beds."""
         return RUNTIME_BYTES + self.memory_bytes() + HOST_BYTES_PER_PARTICLE * self.capacity
-
-
-RUNTIME_BYTES = 172 * 2**20  # peak RSS of a run less fields and host arrays (measured, float64 bed of 20k)
-HOST_BYTES_PER_PARTICLE = 1050  # numpy arrays of the scene and of the read-backs (measured, 20k vs 126k)
-
-
-def available_memory_bytes() -> int | None:
-    """MemAvailable of /proc/meminfo [bytes], or None where it cannot be read."""
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                return int(line.split()[1]) * 1024
-    except OSError:
-        return None
-    return None
-
-
-def peak_resident_bytes() -> int:
-    """This process's peak resident memory [bytes]: VmHWM of /proc/self/status where it exists.
-
-    getrusage's ru_maxrss is not used on Linux: it survives execve, so a process started from a
-    large parent (a long pytest session) reports the parent's size, not its own."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-
-
-def memory_refusal(model: "Model") -> list[str]:
-    """A message when the run would need more memory than the machine has available."""
-    need, have = model.peak_memory_bytes(), available_memory_bytes()
-    if have is None or need <= have:
-        return []
-    return [f"the run needs about {need / 2**30:.2f} GiB ({model.capacity} particles x "
-            f"{model.memory_bytes() / model.capacity + HOST_BYTES_PER_PARTICLE:.0f} B + "
-            f"{RUNTIME_BYTES / 2**20:.0f} MiB runtime), this machine has {have / 2**30:.2f} GiB available: "
-            "use fewer particles, numerics.precision = \"float32\", or a smaller numerics.max_neighbors"]
 
 
 FLOOR = 0.001  # repulsive floor of the hysteretic law, F >= FLOOR k_l delta (source 3)
@@ -446,6 +382,9 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
             raise SceneError(src, [f"materials.{n}.restitution: {mats[n].restitution} is below what the hysteretic law "
                                    f"can give with its force floor ({math.sqrt(FLOOR * 1.01):.3f}); raise it or use "
                                    "contact.model = 'linear'" for n in low])
+    too_big = scene_refusal(scene)  # before any array of the scene's size is made
+    if too_big:
+        raise SceneError(src, too_big)
     mat_names = list(mats)
     default_mat = scene.particles[0].material
     planes, tubes = _surfaces(scene, default_mat)
@@ -581,7 +520,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     heat_reach = 0.5 * fluid_layer * d_max
     reach = d_max + skin + heat_reach
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
-    while np.prod(cells) > max(64 * len(radius), 1 << 20):  # sparse, huge domains: coarser cells
+    while math.prod(cells) > max(64 * len(radius), 1 << 20):  # math.prod: numpy overflows  # sparse, huge domains: coarser cells
         cells = [max(3 if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
     grid = Grid(lo=tuple(dom.min), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
     ratio = d_max / d_min
