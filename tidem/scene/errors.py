@@ -68,6 +68,17 @@ def _unit_hint(value: str) -> str:
     return "write a plain number in SI units"
 
 
+def _described(value: Any) -> str:
+    """'the list [1, 2]', 'the table {...}', 'true', '1e+30' for an error message."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, list):
+        return f"the list {value!r}"
+    if isinstance(value, dict):
+        return f"the table {{{', '.join(map(str, value))}}}"
+    return f"{value!r}"
+
+
 def _model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
     """The pydantic model class that owns the last key of `loc`, if one can be found."""
     cls: Any = root
@@ -127,6 +138,10 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
             msg = f"{path}: required key is missing"
         elif kind in ("float_type", "int_type", "finite_number") and isinstance(value, str):
             msg = f"{path}: expected a number, got the text {value!r}; {_unit_hint(value)}"
+        elif kind in ("float_type", "int_type", "float_parsing", "int_parsing", "int_from_float", "finite_number"):
+            whole = kind.startswith("int")
+            msg = (f"{path}: expected {'a whole number' if whole else 'a number'}, got {_described(value)}; "
+                   f"write {'an integer, e.g. 1000 (not 1e3 or 1000.5)' if whole else 'one number in SI units'}")
         elif kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
             op = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}[kind]
             bound = next(iter(e.get("ctx", {}).values()), "?")
