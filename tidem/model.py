@@ -14,6 +14,7 @@ from tidem.averaging import AveragingLayout, averaging_layout
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.geometry import Grid
 from tidem.memory import HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, field_bytes, memory_refusal, scene_refusal
+from tidem.overlaps import initial_overlaps
 from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
 from tidem.scene.checks import largest_diameter, max_diameter
 from tidem.scene.errors import SceneError
@@ -495,6 +496,10 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     # every particle fixed: nothing moves, so no contact can become unstable and the contact
     # limits do not bind the step; the heat limit (below) and the gas limits (at run time) still do
     all_fixed = bool(fixed.all())
+    overlaps = contacts and initial_overlaps(scene, np.concatenate(x0), radius, np.concatenate(active0),
+                                             np.concatenate(group), planes, tubes, lengths, periodic)
+    if overlaps:
+        raise SceneError(src, overlaps)
     soft = contacts and not all_fixed and _too_soft(scene, law, mats, mat_names, material, radius, np.concatenate(x0),
                                   np.concatenate(active0), speed)
     if soft:
