@@ -38,7 +38,7 @@ def format_bytes(n: float) -> str:
         n /= 1024
     if unit == _UNITS[-1] and abs(n) >= 1024:
         return f"{n * 1024.0 ** (len(_UNITS) - 1):.2g} B"
-    return f"{n:.0f} {unit}" if unit == "B" else f"{n:.3g} {unit}"
+    return f"{n:.3g} {unit}" if unit != "B" and n < 100 else f"{n:.0f} {unit}"
 
 
 def format_count(n: float) -> str:

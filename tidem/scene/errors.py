@@ -156,7 +156,7 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
         elif kind in ("float_type", "int_type", "finite_number") and isinstance(value, str):
             msg = f"{path}: expected a number, got the text {value!r}; {_unit_hint(value)}"
         elif kind in ("float_type", "int_type", "float_parsing", "int_parsing", "int_from_float", "finite_number"):
-            whole = kind.startswith("int")
+            whole = kind.startswith("int") and "int" not in loc  # not the int half of a number
             msg = (f"{path}: expected {'a whole number' if whole else 'a number'}, got {_described(value)}; "
                    f"write {'an integer, e.g. 1000 (not 1e3 or 1000.5)' if whole else 'one number in SI units'}")
         elif kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):

@@ -117,7 +117,8 @@ def apply_override(raw: dict, assignment: str) -> None:
                 raise ValueError(f"--set {key}: index {part} is out of range ({_key_text(parts[:depth])} has "
                                  f"{len(node)} item{'s' if len(node) != 1 else ''}, [0] to [{len(node) - 1}])")
         elif not isinstance(node, dict):
-            hint = f"; write {_key_text(parts[:depth])}[0].{part}" if isinstance(node, list) else ""
+            hint = (f"; write {_key_text(parts[:depth])}[0].{part}" if isinstance(node, list)
+                    else f"; set {_key_text(parts[:depth])}=VALUE itself")
             raise ValueError(f"--set {key}: {_key_text(parts[:depth])} is {'a list' if isinstance(node, list) else 'a value'}"
                              f", not a table, so it has no key '{part}'{hint}")
         if last:
