@@ -249,6 +249,10 @@ def render(
 
     if not (run_dir / "run.json").exists() or not (run_dir / "snapshots.pvd").exists():
         _fail(f"{run_dir}: not a run folder (run.json and snapshots.pvd are missing)", 2)
+    try:
+        name = json.loads((run_dir / "run.json").read_text()).get("scene", run_dir.name)
+    except (ValueError, AttributeError):
+        _fail(f"{run_dir / 'run.json'}: not the JSON table a run writes; run the scene again to remake the folder", 2)
     clim = None
     if range_ is not None:
         try:
@@ -264,7 +268,6 @@ def render(
 
     if not snapshots(run_dir):
         _fail(f"{run_dir}: the snapshot collection is empty; nothing to render", 2)
-    name = json.loads((run_dir / "run.json").read_text()).get("scene", run_dir.name)
     _render(run_dir, name, field, clim, view, slice_, gif or None)
 
 

@@ -167,6 +167,9 @@ CORPUS = [
      "choose another output folder"),
     ("resume without checkpoint", TINY, ["scene", FILE, "--resume", "{dir}", "--no-render", "--quiet"], "--resume",
      "a run writes one"),
+    ("corrupt checkpoint", TINY, ["scene", FILE, "--resume", "{dir}/run", "--no-render", "--quiet"], "--resume",
+     "unreadable checkpoint"),
+    ("render a folder with broken run.json", None, ["render", "{dir}/run"], "run.json", "run the scene again"),
     ("infinite end time", TINY, ["scene", FILE, "--t-end", "inf"], "--t-end", "finite number > 0"),
 ]
 
@@ -176,6 +179,10 @@ def test_bad_input_exits_2_naming_file_key_and_fix(tmp_path, content, argv, key,
     path = tmp_path / "scene.toml"
     if content is not None:
         path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "checkpoint.npz").write_bytes(b"PK\x03\x04 cut short")
+    (tmp_path / "run" / "run.json").write_text('{"scene": "tiny", ')
+    (tmp_path / "run" / "snapshots.pvd").write_text("")
     argv = [a.replace(FILE, str(path)).replace("{dir}", str(tmp_path)) for a in (argv or ["check", FILE])]
     result = runner.invoke(app, argv)
     out = result.output
