@@ -147,6 +147,13 @@ def lattice_site_count(region, spacing: float, kind: str) -> float:
     return math.prod(max(0.0, math.floor(n / spacing + 1e-9)) for n in lengths)
 
 
+def default_neighbors(ratio: float, skin: float, fluid_layer: float) -> int:
+    """Neighbour-list rows per particle when numerics.max_neighbors is not given: four times
+    the neighbours a particle of the smallest size can have within its reach, for a largest to
+    smallest diameter `ratio` (the neighbour search of `tidem.model`)."""
+    return int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + skin + 0.5 * fluid_layer) ** 3))
+
+
 def scene_flags(scene) -> SimpleNamespace:
     """The feature flags that sizes depend on, read from the scene (as `tidem.model.Features`)."""
     mats = scene.materials
@@ -182,7 +189,7 @@ def scene_items(scene) -> list[Item]:
     dmin = min(_smallest_diameter(g.diameter) for g in scene.particles)
     num = scene.numerics
     fluid = scene.heat.fluid_layer if scene.heat is not None else 0.0
-    k = num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + dmax / dmin) / 2) ** 2 * (1 + num.skin + 0.5 * fluid) ** 3))
+    k = num.max_neighbors or default_neighbors(dmax / dmin, num.skin, fluid)
     k, w = (k, num.max_wall_contacts) if feat.contacts else (1, 1)
     per = particle_field_bytes(feat, k, w) + HOST_BYTES_PER_PARTICLE
     items.append(Item(f"the fields of {format_count(total)} particles ({per} B each)", total * per, biggest[1],

@@ -13,7 +13,8 @@ import numpy as np
 from tidem.averaging import AveragingLayout, averaging_layout
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.geometry import Grid
-from tidem.memory import HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, field_bytes, memory_refusal, scene_refusal
+from tidem.memory import (HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, default_neighbors, field_bytes, memory_refusal,
+                          scene_refusal)
 from tidem.overlaps import initial_overlaps
 from tidem.placement import PlacementError, clear_of_obstacles, lattice_sites, sample_diameters
 from tidem.scene.checks import largest_diameter, max_diameter
@@ -529,7 +530,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         cells = [max(3 if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
     grid = Grid(lo=tuple(dom.min), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
     ratio = d_max / d_min
-    k = num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + num.skin + 0.5 * fluid_layer) ** 3))
+    k = num.max_neighbors or default_neighbors(ratio, num.skin, fluid_layer)
     if not contacts:
         k = 1  # no neighbour list is built
 
