@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from tests.conftest import make_scene
-from tidem import model as model_module
+from tidem import memory
 from tidem.model import build_model
 from tidem.scene.errors import SceneError
 from tidem.scene.load import load, validate
@@ -17,7 +17,7 @@ from tidem.scene.load import load, validate
 PEAK = """
 import sys
 from tidem.cli import app
-from tidem.model import peak_resident_bytes
+from tidem.memory import peak_resident_bytes
 try:
     app(sys.argv[1:], standalone_mode=False)
 except SystemExit:
@@ -65,11 +65,11 @@ def test_expected_peak_memory_within_20_percent_of_measured(tmp_path, side):
 
 
 def test_a_scene_that_would_not_fit_is_refused_with_the_numbers(monkeypatch):
-    monkeypatch.setattr(model_module, "available_memory_bytes", lambda: 100 * 2**20)
+    monkeypatch.setattr(memory, "available_memory_bytes", lambda: 100 * 2**20)
     with pytest.raises(SceneError) as err:
         build_model(validate(make_scene()))
     msg = str(err.value)
-    assert "GiB available" in msg and "needs about" in msg and "float32" in msg
+    assert "100 MiB available" in msg and "needs about 172 MiB" in msg and "runtime" in msg
 
 
 def test_arch_auto_without_a_gpu_falls_back_to_the_cpu_saying_so():

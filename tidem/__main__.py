@@ -1,5 +1,5 @@
 """`python -m tidem` runs the command-line interface."""
 
-from tidem.cli import app
+from tidem.cli import main
 
-app(prog_name="tidem")
+main()

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.model import peak_resident_bytes
+from tidem.memory import peak_resident_bytes
 from tidem.placement import spatial_key
 
 BED = Path(__file__).resolve().parent.parent / "benchmarks" / "bed10k.npz"

@@ -3,7 +3,8 @@
 
 Errors in a scene exit with code 2 and one message listing every problem; a run that goes
 wrong (NaN, runaway overlap, capacity) exits with code 3 after saving what it finished;
-Ctrl-C exits with 130 after the same.
+Ctrl-C exits with 130 after the same; any other exception (a bug) exits with code 70 after one
+line naming the log file with its traceback (`main`, `tidem.crash`).
 """
 
 from __future__ import annotations
@@ -16,9 +17,25 @@ import typer
 
 from tidem.scene.errors import SceneError
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, help="tidem: hot granular flows in Taichi.")
+EXIT_CODES = ("Exit codes: 0 done; 2 bad input (the message names the file, the key and the fix); 3 a run stopped "
+              "(output so far kept); 70 internal error (a bug: one line names a log file with the traceback, in "
+              "$TIDEM_LOG_DIR or the temporary folder's tidem-logs); 130 interrupted (output and checkpoint kept).")
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help=f"tidem: hot granular flows in Taichi.\n\n{EXIT_CODES}")
 
 Sets = Annotated[Optional[list[str]], typer.Option("--set", help="Override a scene key, e.g. --set outlet.speed=0.003")]
+
+
+def main() -> None:
+    """The `tidem` command: the app, with an unexpected exception turned into one line and a log
+    file (exit 70, `tidem.crash`); Ctrl-C keeps its own handling (the run loop saves its output)."""
+    try:
+        app(prog_name="tidem")
+    except Exception as exc:  # the last line of defence: no raw traceback reaches the terminal
+        from tidem import crash
+
+        typer.echo(crash.one_line(exc, crash.write_log(exc)), err=True)
+        sys.exit(crash.INTERNAL_ERROR)
 
 
 def _fail(message: str, code: int) -> None:
@@ -60,8 +77,8 @@ def scene(
     """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
     if arch not in ("cpu", "cuda", "vulkan", "auto"):
         _fail(f"--arch {arch}: choose cpu, cuda, vulkan or auto", 2)
-    if t_end is not None and not t_end > 0:
-        _fail(f"--t-end {t_end}: the end time must be > 0 s", 2)
+    if t_end is not None and not 0 < t_end < float("inf"):
+        _fail(f"--t-end {t_end}: the end time must be a finite number > 0 s", 2)
     loaded = _load(path, set_)
     from tidem.runtime import BackendUnavailable, ensure_taichi
 
@@ -77,6 +94,7 @@ def scene(
     if resume is not None and out is not None and out.resolve() != resume.resolve():
         _fail(f"--out {out} and --resume {resume}: a resumed run writes into the folder it resumes; drop --out", 2)
     out_dir = resume or out or Path("renders") / model.name
+    _writable(out_dir, "--resume" if resume is not None else "--out")
     checkpoint = _checkpoint(resume, loaded, model) if resume is not None else None
     typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
                f"{f' (+{model.capacity - int(model.active0.sum())} to pour)' if model.pours else ''}, "
@@ -95,6 +113,20 @@ def scene(
         _fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
     if result.status == "interrupted":
         _fail(result.message + f"; finished output is in {out_dir}", 130)
+
+
+def _writable(out_dir: Path, option: str) -> None:
+    """Exit 2 naming the option unless `out_dir` is (or can be made) a folder this process can write in."""
+    import tempfile
+
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=out_dir).close()
+    except FileExistsError:
+        _fail(f"{option} {out_dir}: a file of that name exists; give a folder", 2)
+    except OSError as exc:
+        _fail(f"{option} {out_dir}: cannot write there ({exc.strerror or exc}); choose another output folder "
+              f"with --out", 2)
 
 
 def _checkpoint(run_dir: Path, loaded, model):
@@ -217,6 +249,10 @@ def render(
 
     if not (run_dir / "run.json").exists() or not (run_dir / "snapshots.pvd").exists():
         _fail(f"{run_dir}: not a run folder (run.json and snapshots.pvd are missing)", 2)
+    try:
+        name = json.loads((run_dir / "run.json").read_text()).get("scene", run_dir.name)
+    except (ValueError, AttributeError):
+        _fail(f"{run_dir / 'run.json'}: not the JSON table a run writes; run the scene again to remake the folder", 2)
     clim = None
     if range_ is not None:
         try:
@@ -232,7 +268,6 @@ def render(
 
     if not snapshots(run_dir):
         _fail(f"{run_dir}: the snapshot collection is empty; nothing to render", 2)
-    name = json.loads((run_dir / "run.json").read_text()).get("scene", run_dir.name)
     _render(run_dir, name, field, clim, view, slice_, gif or None)
 
 
@@ -255,6 +290,8 @@ def check(
     set_: Sets = None,
 ):
     """Validate a scene and print its derived numbers (particles, time steps, kernels, memory)."""
+    from tidem.memory import format_bytes
+
     loaded = _load(path, set_)
     model = _model(loaded)
     f = model.features
@@ -271,8 +308,8 @@ def check(
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
         f"kernels: {', '.join(f.kernels())}",
-        f"memory (fields): {model.memory_bytes() / 2**20:.1f} MiB, {model.memory_bytes() / model.capacity:.0f} B/particle; "
-        f"expected peak of a run {model.peak_memory_bytes() / 2**20:.0f} MiB",
+        f"memory (fields): {format_bytes(model.memory_bytes())}, {model.memory_bytes() / model.capacity:.0f} B/particle; "
+        f"expected peak of a run {format_bytes(model.peak_memory_bytes())}",
     ]
     typer.echo("\n".join(lines))
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -16,6 +15,9 @@ from tidem.features import Features, scene_features
 from tidem.gas_limits import gas_step_checks
 from tidem.heat_limits import heat_step_errors
 from tidem.kernels.geometry import Grid
+from tidem.memory import (HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, default_neighbors, field_bytes, memory_refusal,
+                          scene_refusal)
+from tidem.overlaps import initial_overlaps
 from tidem.placement import place_groups
 from tidem.reactions import reaction_constants, reaction_index, reaction_step_checks
 from tidem.scene.averaging_layout import AveragingLayout, averaging_layout
@@ -71,29 +73,7 @@ class Model:
 
     def memory_bytes(self) -> int:
         """Expected memory of the Taichi fields [bytes] (see `tidem.state.State`)."""
-        fp = 8 if self.features.precision == "float64" else 4
-        k, w = self.max_neighbors, self.wall_slots
-        per = fp * (3 * 7 + 6) + 4 * 8  # vectors x v w f tq x_build + scalars; ints
-        per += k * (4 * 3 + 3 * fp)  # nbr, nbr_new, src, ft
-        per += w * (4 + 3 * fp)
-        if self.features.rolling:
-            per += 3 * fp * (k + w)
-        if self.features.hysteretic:
-            per += fp * (k + w)
-        if self.features.heat:
-            per += 3 * fp + (k * fp if self.features.contacts else 0)  # T, q, 1/(m c); qpair
-        if self.features.gas:
-            per += fp * (8 + (2 if self.features.heat else 0) + self.features.species)
-        if self.features.reactions:
-            per += 4 + 2 * fp
-        cells = self.grid.n_cells * 4 * 3
-        if self.features.gas:
-            from tidem.gas import gas_grid
-
-            gas_cells = int(np.prod(gas_grid(self.scene).cells))
-            cells += gas_cells * (fp * (9 + 4 * self.features.heat + 8 * 3 + bool(self.features.reactions)
-                                        + 3 * self.features.species) + 4 * 4)
-        return per * self.capacity + cells
+        return field_bytes(self)
 
     def peak_memory_bytes(self) -> int:
         """Expected peak resident memory of a run [bytes]: the Python + Taichi + LLVM runtime,
@@ -102,54 +82,12 @@ class Model:
         return RUNTIME_BYTES + self.memory_bytes() + HOST_BYTES_PER_PARTICLE * self.capacity
 
 
-RUNTIME_BYTES = 172 * 2**20  # peak RSS of a run less fields and host arrays (measured, float64 bed of 20k)
-HOST_BYTES_PER_PARTICLE = 1050  # numpy arrays of the scene and of the read-backs (measured, 20k vs 126k)
-
-
-def available_memory_bytes() -> int | None:
-    """MemAvailable of /proc/meminfo [bytes], or None where it cannot be read."""
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                return int(line.split()[1]) * 1024
-    except OSError:
-        return None
-    return None
-
-
-def peak_resident_bytes() -> int:
-    """This process's peak resident memory [bytes]: VmHWM of /proc/self/status where it exists.
-
-    getrusage's ru_maxrss is not used on Linux: it survives execve, so a process started from a
-    large parent (a long pytest session) reports the parent's size, not its own."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-
-
-def memory_refusal(model: "Model") -> list[str]:
-    """A message when the run would need more memory than the machine has available."""
-    need, have = model.peak_memory_bytes(), available_memory_bytes()
-    if have is None or need <= have:
-        return []
-    return [f"the run needs about {need / 2**30:.2f} GiB ({model.capacity} particles x "
-            f"{model.memory_bytes() / model.capacity + HOST_BYTES_PER_PARTICLE:.0f} B + "
-            f"{RUNTIME_BYTES / 2**20:.0f} MiB runtime), this machine has {have / 2**30:.2f} GiB available: "
-            "use fewer particles, numerics.precision = \"float32\", or a smaller numerics.max_neighbors"]
-
-
 def neighbour_grid(lo, lengths, periodic, capacity: int, reach: float) -> Grid:
     """The broad phase's cell grid over the domain: cells at least `reach` wide (largest
     diameter + skin + gas lens), coarsened for a sparse, huge domain to at most
     max(64 capacity, 2^20) cells."""
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
-    while np.prod(cells) > max(64 * capacity, 1 << 20):
+    while math.prod(cells) > max(64 * capacity, 1 << 20):
         cells = [max(3 if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
     return Grid(lo=tuple(lo), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
 
@@ -157,8 +95,7 @@ def neighbour_grid(lo, lengths, periodic, capacity: int, reach: float) -> Grid:
 def neighbour_slots(num, d_max: float, d_min: float, fluid_layer: float) -> int:
     """numerics.max_neighbors, else 4 x the spheres of diameter d_min that fit in the reach of
     the largest particle (skin and gas lens included)."""
-    ratio = d_max / d_min
-    return num.max_neighbors or int(4 * math.ceil(3.0 * ((1 + ratio) / 2) ** 2 * (1 + num.skin + 0.5 * fluid_layer) ** 3))
+    return num.max_neighbors or default_neighbors(d_max / d_min, num.skin, fluid_layer)
 
 
 def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = None) -> Model:
@@ -171,6 +108,9 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     errors = hysteretic_floor_errors(scene)
     if errors:
         raise SceneError(src, errors)
+    too_big = scene_refusal(scene)  # before any array of the scene's size is made
+    if too_big:
+        raise SceneError(src, too_big)
     mat_names = list(mats)
     planes, tubes = surfaces(scene, scene.particles[0].material)
     periodic = tuple(AXES[a] in dom.periodic for a in range(3))
@@ -185,6 +125,10 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
 
     contacts = scene.contact.model != "none"
     all_fixed = bool(fixed.all())
+    overlaps = contacts and initial_overlaps(scene, placed.x0, radius, placed.active0, placed.group, planes, tubes,
+                                             lengths, periodic)
+    if overlaps:
+        raise SceneError(src, overlaps)
     dt, scales, errors = contact_time_step(scene, material, radius, placed.x0, placed.v0, placed.active0,
                                            planes + tubes, all_fixed)
     if errors:

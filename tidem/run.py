@@ -55,6 +55,9 @@ class Output:
         self.gas_dir = self.dir / "gas" if model.features.gas else None
         if self.gas_dir is not None:
             self.gas_dir.mkdir(exist_ok=True)
+        folders = [self.dir, self.snap_dir] + ([self.gas_dir] if self.gas_dir is not None else [])
+        for half in [p for folder in folders for p in folder.glob("*.tmp")]:
+            half.unlink()  # half-written by a killed run (every file is written under .tmp, then renamed)
         kept = {Path(name).name for _, name in self.entries}
         for old in self.snap_dir.glob("*.vtp"):
             if old.name not in kept:

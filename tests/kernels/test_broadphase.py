@@ -116,8 +116,8 @@ def test_history_follows_partner_across_rebuild(solver_for):
 def test_capacity_overflow_is_an_error(solver_for):
     from tidem.solver import RunError
 
-    rng = np.random.default_rng(2)
-    x = rng.uniform(0.0, 0.01, (300, 3))
+    side = 0.001 + 0.00205 * np.arange(4)  # a cubic lattice just wider than d: six neighbours within reach
+    x = np.stack(np.meshgrid(side, side, side, indexing="ij"), axis=-1).reshape(-1, 3)
     raw = make_scene(
         domain={"min": [0, 0, 0], "max": [0.01, 0.01, 0.01], "walls": "none", "gravity": [0, 0, 0]},
         particles=[{"name": "p", "material": "steel", "positions": x.tolist(),

@@ -250,7 +250,8 @@ def cross_checks(scene: Scene) -> list[str]:
             if t.center[a] - r < dom.min[a] or t.center[a] + r > dom.max[a]:
                 errs.append(
                     f"tubes[{i}] lies outside the domain: along {AXES[a]} it spans "
-                    f"{t.center[a] - r:g}..{t.center[a] + r:g} m, the domain {dom.min[a]:g}..{dom.max[a]:g} m"
+                    f"{t.center[a] - r:g}..{t.center[a] + r:g} m, the domain {dom.min[a]:g}..{dom.max[a]:g} m; "
+                    "move its center or make it thinner"
                 )
     if scene.outlet is not None:
         o = scene.outlet

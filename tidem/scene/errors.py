@@ -21,6 +21,9 @@ _UNITS = {
 }
 
 
+_TUPLE_FIX = "write 3 numbers [x, y, z] for a point or vector, 2 [low, high] for a range"
+
+
 class SceneError(Exception):
     """A scene file that cannot be run; `messages` holds one line per problem."""
 
@@ -66,6 +69,17 @@ def _unit_hint(value: str) -> str:
     if unit in _UNITS:
         return f"units are SI: write {number * _UNITS[unit]:g}"
     return "write a plain number in SI units"
+
+
+def _described(value: Any) -> str:
+    """'the list [1, 2]', 'the table {...}', 'true', '1e+30' for an error message."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, list):
+        return f"the list {value!r}"
+    if isinstance(value, dict):
+        return f"the table {{{', '.join(map(str, value))}}}"
+    return f"{value!r}"
 
 
 def _model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
@@ -123,10 +137,28 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
                 hint = f"; did you mean '{close[0]}'?" if close else f"; valid keys: {', '.join(owner.model_fields)}"
             where = key_path(loc[:-1]) or "top level"
             msg = f"{where}: unknown key '{name}'{hint}"
+        elif kind == "missing" and isinstance(loc[-1], int):
+            msg = f"{key_path(loc[:-1])}: too few numbers (got {value!r}); {_TUPLE_FIX}"
         elif kind == "missing":
-            msg = f"{path}: required key is missing"
+            msg = f"{path}: required key is missing; add it (docs/scenes.md lists every key)"
+        elif kind in ("too_long", "too_short") and e["msg"].startswith("Tuple"):
+            msg = f"{path}: {'too many' if kind == 'too_long' else 'too few'} numbers (got {value!r}); {_TUPLE_FIX}"
+        elif kind == "tuple_type":
+            msg = f"{path}: expected a list of numbers, got {_described(value)}; {_TUPLE_FIX}" + (
+                ", and a list of points as [[x, y, z], [x, y, z]]" if isinstance(loc[-1], int) else "")
+        elif kind in ("bool_type", "bool_parsing"):
+            msg = f"{path}: expected true or false, got {_described(value)}; write true or false (no quotes)"
+        elif kind == "list_type":
+            msg = f"{path}: expected a list, got {_described(value)}; write [a, b, ...], or each item as a [[{path}]] table"
+        elif kind in ("dict_type", "model_type"):
+            example = "one table per material, e.g. [materials.sand]" if path == "materials" else f"[{path}] with key = value lines"
+            msg = f"{path}: expected a table, got {_described(value)}; write {example}"
         elif kind in ("float_type", "int_type", "finite_number") and isinstance(value, str):
             msg = f"{path}: expected a number, got the text {value!r}; {_unit_hint(value)}"
+        elif kind in ("float_type", "int_type", "float_parsing", "int_parsing", "int_from_float", "finite_number"):
+            whole = kind.startswith("int") and "int" not in loc  # not the int half of a number
+            msg = (f"{path}: expected {'a whole number' if whole else 'a number'}, got {_described(value)}; "
+                   f"write {'an integer, e.g. 1000 (not 1e3 or 1000.5)' if whole else 'one number in SI units'}")
         elif kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
             op = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}[kind]
             bound = next(iter(e.get("ctx", {}).values()), "?")

@@ -43,6 +43,12 @@ def resolve(name_or_path: str | None) -> Path:
     path = Path(name_or_path)
     if path.is_file():
         return path
+    if path.is_dir():
+        inside = sorted(p.name for p in path.glob("*.toml"))
+        raise SceneError(str(name_or_path), [
+            "this is a folder, not a scene file; give the .toml file "
+            + (f"inside it ({', '.join(inside[:5])}{', ...' if len(inside) > 5 else ''})" if inside
+               else "itself (this folder holds none)")])
     shipped = shipped_scenes()
     for candidate in (path.name, path.name + ".toml"):
         if candidate in shipped:
@@ -53,52 +59,90 @@ def resolve(name_or_path: str | None) -> Path:
     )
 
 
+def read_toml(path: Path) -> dict:
+    """The TOML table of a scene file; SceneError if it is not readable UTF-8 TOML text."""
+    try:
+        data = path.read_bytes()
+        if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+            raise SceneError(str(path), ["saved as UTF-16; save the file as UTF-8 (e.g. iconv -f utf-16 -t utf-8 "
+                                         "OLD.toml > NEW.toml, or 'UTF-8' in the editor's save dialog)"])
+        text = data.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
+    except OSError as exc:
+        raise SceneError(str(path), [f"cannot read the file: {exc.strerror or exc}; check its permissions"]) from None
+    except UnicodeDecodeError as exc:
+        line = exc.object[:exc.start].count(b"\n") + 1
+        raise SceneError(str(path), [
+            "this is a binary file, not a scene (TOML text); give the scene's .toml file" if b"\0" in exc.object[:4096]
+            else f"not UTF-8 text (byte {exc.object[exc.start]:#04x} on line {line}); save the file as UTF-8, "
+                 "e.g. iconv -f latin1 -t utf-8 OLD.toml > NEW.toml"]) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(str(path), [f"not valid TOML: {exc}; see docs/scenes.md for the syntax"]) from None
+
+
 _INDEX = re.compile(r"^(\w+)\[(\d+)\]$")
 
 
 def apply_override(raw: dict, assignment: str) -> None:
-    """Apply 'a.b[1].c=VALUE' to the raw TOML dict; VALUE is read as a TOML value (text if not)."""
+    """Apply 'a.b[1].c=VALUE' to the raw TOML dict; VALUE is read as a TOML value (text if not).
+    A key that cannot be followed raises ValueError naming the key and the fix."""
     if "=" not in assignment:
         raise ValueError(f"--set {assignment!r}: expected KEY=VALUE, e.g. outlet.speed=0.003")
     key, text = assignment.split("=", 1)
+    key = key.strip()
     try:
         value = tomllib.loads(f"v = {text.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = text.strip()
     parts: list[str | int] = []
-    for piece in key.strip().split("."):
+    for piece in key.split("."):
         m = _INDEX.match(piece)
         if m:
             parts += [m.group(1), int(m.group(2))]
         elif piece.isdigit():
             parts.append(int(piece))
-        else:
+        elif re.fullmatch(r"\w+", piece):
             parts.append(piece)
-    node: Any = raw
-    for here, nxt in zip(parts[:-1], parts[1:]):
-        if isinstance(here, int):
-            if not isinstance(node, list) or here >= len(node):
-                raise ValueError(f"--set {key}: index {here} is out of range")
-            node = node[here]
         else:
-            if here not in node:
-                node[here] = [] if isinstance(nxt, int) else {}
-            node = node[here]
-    last = parts[-1]
-    if isinstance(last, int):
-        if not isinstance(node, list) or last >= len(node):
-            raise ValueError(f"--set {key}: index {last} is out of range")
-    node[last] = value
+            raise ValueError(f"--set {key}={text}: '{piece}' is not a key; write KEY=VALUE with keys joined by dots "
+                             "and list items as [i], e.g. particles[0].diameter.value=0.002")
+    node: Any = raw
+    for depth, part in enumerate(parts):
+        last = depth == len(parts) - 1
+        if isinstance(part, int):
+            if not isinstance(node, list):
+                raise ValueError(f"--set {key}: {_key_text(parts[:depth]) or 'the scene'} is not a list; drop [{part}]")
+            if part >= len(node):
+                raise ValueError(f"--set {key}: index {part} is out of range ({_key_text(parts[:depth])} has "
+                                 f"{len(node)} item{'s' if len(node) != 1 else ''}, [0] to [{len(node) - 1}])")
+        elif not isinstance(node, dict):
+            hint = (f"; write {_key_text(parts[:depth])}[0].{part}" if isinstance(node, list)
+                    else f"; set {_key_text(parts[:depth])}=VALUE itself")
+            raise ValueError(f"--set {key}: {_key_text(parts[:depth])} is {'a list' if isinstance(node, list) else 'a value'}"
+                             f", not a table, so it has no key '{part}'{hint}")
+        if last:
+            node[part] = value
+        elif isinstance(part, str) and part not in node:
+            node[part] = [] if isinstance(parts[depth + 1], int) else {}
+            node = node[part]
+        else:
+            node = node[part]
+
+
+def _key_text(parts: list) -> str:
+    """['particles', 0, 'diameter'] -> 'particles[0].diameter'."""
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else ("." if out else "") + p
+    return out
 
 
 def load(name_or_path: str | None, overrides: list[str] = ()) -> LoadedScene:
     """Load and validate a scene; raises `SceneError` listing every problem."""
     path = resolve(name_or_path)
     source = str(path)
-    try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(source, [f"not valid TOML: {exc}"]) from None
+    raw = read_toml(path)
     raw = copy.deepcopy(raw)
     errors: list[str] = []
     for assignment in overrides:

@@ -115,7 +115,7 @@ class ParticleGroup(Strict):
     velocities: list[Vec3] | None = None
     temperature: Positive | None = None
     fixed: bool = False
-    seed: int = 0
+    seed: int = Field(default=0, ge=0)
 
     @model_validator(mode="before")
     @classmethod

@@ -1,0 +1,123 @@
+"""Initial overlaps: particles placed into each other, or into a wall or tube, found before the
+first step, so that `tidem check` names the particles and the key to change instead of a run
+stopping at t = 0 with "the contacts are too soft".
+
+The overlap ratio is the runtime's (`kernels/contact.py`, `Solver.check`): the overlap depth
+over the smaller radius of a pair, or over the particle's radius at a wall or tube, compared
+with numerics.max_overlap. Pairs are found on a cell grid of twice the largest radius (a
+particle meets only the 27 cells around its own), with the periodic axes wrapped.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+MAX_MESSAGES = 6  # overlapping group pairs and particles at walls reported one by one
+
+
+def overlapping_pairs(x: np.ndarray, radius: np.ndarray, lo, lengths, periodic) -> tuple[np.ndarray, ...]:
+    """(i, j, ratio) of every pair i < j whose spheres overlap, ratio = depth / min(r_i, r_j)."""
+    n = len(x)
+    none = np.zeros(0, np.int64)
+    if n < 2:
+        return none, none, np.zeros(0)
+    lengths = np.asarray(lengths, float)
+    counts = np.clip(np.floor(lengths / (2.0 * radius.max())), 1, 2**20).astype(np.int64)
+    cell = np.clip(np.floor((x - np.asarray(lo)) / (lengths / counts)).astype(np.int64), 0, counts - 1)
+
+    def key(c):
+        return (c[:, 0] * counts[1] + c[:, 1]) * counts[2] + c[:, 2]
+
+    order = np.argsort(key(cell), kind="stable")
+    keys = key(cell)[order]
+    found_i, found_j = [], []
+    for offset in itertools.product((-1, 0, 1), repeat=3):
+        near = cell + np.asarray(offset)
+        ok = np.ones(n, bool)
+        for a in range(3):
+            if periodic[a]:
+                near[:, a] %= counts[a]
+            else:
+                ok &= (near[:, a] >= 0) & (near[:, a] < counts[a])
+        k = key(near)
+        start = np.searchsorted(keys, k, "left")
+        many = np.where(ok, np.searchsorted(keys, k, "right") - start, 0)
+        i = np.repeat(np.arange(n), many)
+        j = order[np.repeat(start - np.cumsum(many) + many, many) + np.arange(many.sum())]
+        found_i.append(i[i < j])
+        found_j.append(j[i < j])
+    pair = np.unique(np.concatenate(found_i) * n + np.concatenate(found_j))
+    i, j = pair // n, pair % n
+    d = x[j] - x[i]
+    for a in range(3):
+        if periodic[a]:
+            d[:, a] -= lengths[a] * np.round(d[:, a] / lengths[a])
+    depth = radius[i] + radius[j] - np.linalg.norm(d, axis=1)
+    hit = depth > 0
+    return i[hit], j[hit], depth[hit] / np.minimum(radius[i[hit]], radius[j[hit]])
+
+
+def surface_overlaps(x: np.ndarray, radius: np.ndarray, planes: list[dict], tubes: list[dict], lengths,
+                     periodic) -> tuple[np.ndarray, list[str]]:
+    """Per particle, the largest overlap ratio depth / r with a plane or tube, and its name."""
+    worst = np.zeros(len(x))
+    which = np.full(len(x), -1)
+    names = [p["name"] for p in planes] + [t["name"] for t in tubes]
+    gaps = [(x - np.asarray(p["p0"])) @ np.asarray(p["n"]) for p in planes]
+    for t in tubes:
+        d = x - np.asarray(t["c"])
+        for a in range(3):
+            if periodic[a]:
+                d[:, a] -= lengths[a] * np.round(d[:, a] / lengths[a])
+        gaps.append(np.linalg.norm(d * np.asarray(t["mask"]), axis=1) - t["r"])
+    for s, gap in enumerate(gaps):
+        ratio = (radius - gap) / radius
+        deeper = ratio > worst
+        worst[deeper], which[deeper] = ratio[deeper], s
+    return worst, [names[s] if s >= 0 else "" for s in which]
+
+
+def _where(scene, group: int, k: int) -> str:
+    """The key of a particle: 'particles[0].positions[3]' or 'particle 12 of particles[0].region'."""
+    if scene.particles[group].positions is not None:
+        return f"particles[{group}].positions[{k}]"
+    return f"particle {k} of the fill of particles[{group}].region"
+
+
+def initial_overlaps(scene, x, radius, active, group, planes, tubes, lengths, periodic) -> list[str]:
+    """Messages for placed particles that overlap each other, a wall or a tube by more than
+    numerics.max_overlap, each naming the particles, their group's key and the fix."""
+    limit = scene.numerics.max_overlap
+    idx = np.flatnonzero(active)
+    first = {g: int(np.argmax(group == g)) for g in np.unique(group)}
+    xs, rs = x[idx], radius[idx]
+    i, j, ratio = overlapping_pairs(xs, rs, scene.domain.min, lengths, periodic)
+    bad = ratio > limit
+    out: list[str] = []
+    seen: dict[tuple[int, int], int] = {}
+    for a, b, r in sorted(zip(idx[i[bad]], idx[j[bad]], ratio[bad]), key=lambda t: -t[2]):
+        ga, gb = int(group[a]), int(group[b])
+        pair = (min(ga, gb), max(ga, gb))
+        seen[pair] = seen.get(pair, 0) + 1
+        if seen[pair] > 1 or len(out) >= MAX_MESSAGES:
+            continue
+        names = (_where(scene, ga, int(a - first[ga])), _where(scene, gb, int(b - first[gb])))
+        fill = any(scene.particles[g].positions is None for g in pair)
+        fix = ("make the regions and positions of these groups disjoint" if fill else
+               f"place their centres at least {radius[a] + radius[b]:.3g} m apart (the sum of their radii), "
+               "or remove one")
+        out.append(f"{names[0]} and {names[1]} overlap by {100 * r:.0f} % of the smaller radius at "
+                   f"{np.round(x[a], 6).tolist()} (limit numerics.max_overlap = {100 * limit:g} %); {fix}")
+    for k, pair in enumerate(seen):
+        if seen[pair] > 1 and k < len(out):
+            out[k] += f" ({seen[pair]} overlapping pairs between these groups in all)"
+    worst, surface = surface_overlaps(xs, rs, planes, tubes, lengths, periodic)
+    for p in np.flatnonzero(worst > limit)[:max(0, MAX_MESSAGES - len(out))]:
+        a = idx[p]
+        g = int(group[a])
+        out.append(f"{_where(scene, g, int(a - first[g]))} at {np.round(x[a], 6).tolist()} overlaps {surface[p]} by "
+                   f"{100 * worst[p]:.0f} % of its radius (limit numerics.max_overlap = {100 * limit:g} %); move it "
+                   f"clear of the surface (centre at least {radius[a]:.3g} m from it, on the particles' side)")
+    return out
