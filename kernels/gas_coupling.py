@@ -33,14 +33,20 @@ from .gas_grid import make_cic
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
-                          species: bool = False, tracer_dt: float = 0.0, t_in: float = 0.0):
+                          species: bool = False, tracer_dt: float = 0.0, t_in: float = 0.0,
+                          coarse_grain: bool = False):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
     particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
     `tracer_dt` (the DEM step, scenes with reactions) a reacting particle's drag coefficient is
     capped at m / (2 dt): one that shrank below the drag relaxation limit follows the gas
     (tracer limit) instead of making the explicit drag update unstable. `t_in` is the inlet gas
-    temperature, used below the first cell centre."""
+    temperature, used below the first cell centre. With `coarse_grain`, particle i is a parcel of
+    k^3 grains of diameter d_p / k (k = S.cg[i]): drag and heat exchange are those of one grain
+    times k^3 (K_p = k^3 K(eps, d_p/k, w), H_p = k^3 h(d_p/k) pi (d_p/k)^2; the per-grain
+    closures of MFiX's CGDEM and CFDEM's coarse-grained models), which keeps the grains'
+    terminal velocity, drag relaxation time and lumped heating time; the pressure-gradient
+    force and the voidage take the parcel's volume, k^3 grains' volume."""
     cic, corner, weight = make_cic(gg)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
@@ -125,8 +131,12 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 eps = sample_cells(G.eps, x)
                 u = sample_faces(U, x)
                 d = 2.0 * S.radius[i]
+                grains = 1.0  # grains per parcel
+                if ti.static(coarse_grain):
+                    d /= S.cg[i]
+                    grains = S.cg[i] ** 3
                 w = (u - S.v[i]).norm()
-                k = drag_coefficient(eps, d, w)
+                k = grains * drag_coefficient(eps, d, w)
                 if ti.static(tracer_dt > 0.0):
                     if S.rx[i] >= 0:
                         k = ti.min(k, 0.5 * S.mass[i] / tracer_dt)
@@ -142,7 +152,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                         BV[c][J] += wk * S.v[i][c]
                 if ti.static(heat):
                     h = nusselt(eps, d, w) * k_gas / d
-                    hp = h * math.pi * d * d
+                    hp = grains * h * math.pi * d * d
                     S.gH[i] = hp
                     heat_rate = hp * S.inv_heat_cap[i]
                     if ti.static(tracer_dt > 0.0):

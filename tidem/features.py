@@ -33,6 +33,7 @@ class Features:
     wall_foil: bool = False  # a heated-foil plane wall (fixed heat flux), one temperature per wall
     growth: bool = False  # particles that grow (polymerization with growth)
     averaging: bool = False  # time-averaged fields in cells and ring sectors ([averaging])
+    coarse_grain: bool = False  # parcels standing for k^3 grains (particles[i].coarse_grain > 1)
 
     @property
     def contacts(self) -> bool:
@@ -92,4 +93,5 @@ def scene_features(scene, n_planes: int, n_tubes: int) -> Features:
         wall_foil=scene.heat is not None and any(w.heat_flux is not None for w in scene.walls),
         growth=any(r.type == "polymerization" and r.growth for r in scene.reactions),
         averaging=scene.averaging is not None,
+        coarse_grain=any(g.coarse_grain != 1.0 for g in scene.particles),
     )

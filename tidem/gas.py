@@ -66,7 +66,7 @@ class GasPhase:
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
-            model.dt if self.sources else 0.0, self.t_in)
+            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain)
         if self.species:
             ox = gas.oxygen
             self._species = make_species_kernel(gg, G, self.flow, gas.density, ox.diffusivity)

@@ -38,16 +38,18 @@ def fixed_bed_voidage(gg: GasGrid, x: np.ndarray, radius: np.ndarray) -> float:
 
 
 def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray,
-                    fixed_x: np.ndarray | None = None) -> list[str]:
+                    fixed_x: np.ndarray | None = None, grain_radius: np.ndarray | None = None) -> list[str]:
     """Refusals before the first step: drag relaxation, gas Courant and diffusion numbers.
     The Courant number takes the interstitial inlet velocity at `gas.min_voidage` (a moving
     bed may pack that far), or for a bed whose particles are all fixed (at `fixed_x`) at its
-    densest cell's voidage."""
+    densest cell's voidage. The drag relaxation time is the grains' (`grain_radius`, for
+    coarse-grained parcels; default `radius`)."""
     gas = scene.gas
     gg = gas_grid(scene)
     errs = []
-    i = int(np.argmin(density * radius**2))
-    rate = drag_rate_bound(gas, 2 * radius[i], density[i])
+    grain = radius if grain_radius is None else grain_radius
+    i = int(np.argmin(density * grain**2))
+    rate = drag_rate_bound(gas, 2 * grain[i], density[i])
     if dt * rate > 1.0:
         errs.append(f"gas: the drag relaxation time of the smallest, lightest particles (about {1 / rate:.3g} s) is "
                     f"shorter than the time step {dt:.3g} s; use numerics.dt <= {1 / rate:.3g} (or a smaller "

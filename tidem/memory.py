@@ -23,7 +23,7 @@ from pathlib import Path
 from tidem.features import scene_features
 from tidem.gas_geometry import gas_grid
 from tidem.scene.averaging_layout import cell_grid
-from tidem.scene.sizes import largest_diameter, max_diameter
+from tidem.scene.sizes import largest_parcel, max_diameter
 
 RUNTIME_BYTES = 172 * 2**20  # peak RSS of a run less fields and host arrays (measured, float64 bed of 20k)
 HOST_BYTES_PER_PARTICLE = 1050  # numpy arrays of the scene and of the read-backs (measured, 20k vs 126k)
@@ -90,7 +90,7 @@ def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
     if feat.heat:
         per += 3 * fp  # T, q, 1/(m c)
     if feat.gas:
-        per += fp * (8 + (2 if feat.heat else 0) + feat.species)
+        per += fp * (8 + (2 if feat.heat else 0) + feat.species + feat.coarse_grain)  # gK geps gu ggp (gH gT) (gY) (cg)
     if feat.reactions:
         per += 4 + 2 * fp
     return per
@@ -165,7 +165,7 @@ def scene_items(scene) -> list[Item]:
     counts = []
     for i, g in enumerate(scene.particles):
         key = f"particles[{i}]"
-        d = largest_diameter(g.diameter)
+        d = largest_parcel(g)
         if g.region is not None:
             sites = lattice_site_count(g.region, 1.02 * d, g.lattice)
             items.append(Item(f"the {format_count(sites)} lattice sites of the fill of {key}.region "
@@ -178,7 +178,7 @@ def scene_items(scene) -> list[Item]:
     total = sum(n for n, _, _ in counts)
     biggest = max(counts)
     dmax = max_diameter(scene)
-    dmin = min(_smallest_diameter(g.diameter) for g in scene.particles)
+    dmin = min(g.coarse_grain * _smallest_diameter(g.diameter) for g in scene.particles)
     num = scene.numerics
     fluid = scene.heat.fluid_layer if scene.heat is not None else 0.0
     k = num.max_neighbors or default_neighbors(dmax / dmin, num.skin, fluid)

@@ -66,6 +66,7 @@ class Model:
     reaction_index: np.ndarray | None = None
     reaction_constants: list | None = None
     averaging: AveragingLayout | None = None
+    coarse_grain: np.ndarray | None = None  # k of each particle's group: a parcel of k^3 grains
 
     @property
     def scene(self):
@@ -119,6 +120,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     if errors:
         raise SceneError(src, errors)
     radius, material, fixed = placed.radius, placed.material, placed.fixed
+    grain_scale = np.array([g.coarse_grain for g in scene.particles])[placed.group]  # parcel / grain diameter
     density = np.array([mats[m].density for m in mat_names])[material]
     mass = density * 4.0 / 3.0 * math.pi * radius**3
     pair, surf = parameter_tables(scene, mat_names, planes + tubes)
@@ -149,7 +151,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         if errors:
             raise SceneError(src, errors)
     if scene.gas is not None:
-        errors = gas_step_checks(scene, dt, radius, density, placed.x0 if all_fixed else None)
+        errors = gas_step_checks(scene, dt, radius, density, placed.x0 if all_fixed else None, radius / grain_scale)
         if errors:
             raise SceneError(src, errors)
     rx = rconst = None
@@ -173,6 +175,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
         averaging=averaging_layout(scene),
+        coarse_grain=grain_scale if any(g.coarse_grain != 1.0 for g in scene.particles) else None,
     )
     too_big = memory_refusal(model)
     if too_big:

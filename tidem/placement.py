@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tidem.scene.sizes import largest_diameter
+from tidem.scene.sizes import largest_parcel
 
 
 class PlacementError(ValueError):
@@ -122,7 +122,7 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
         else:
             count = None  # fill every free lattice site of the region
         if g.region is not None:
-            spacing = 1.02 * largest_diameter(g.diameter)
+            spacing = 1.02 * largest_parcel(g)
             sites = lattice_sites(g.region.min, g.region.max, spacing, g.lattice)
             plane_geo = [(p["p0"], p["n"]) for p in planes]
             tube_geo = [(t["c"], t["mask"], t["r"]) for t in tubes]
@@ -136,7 +136,7 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
                 )
                 continue
         try:
-            d = sample_diameters(g.diameter, count, rng)
+            d = g.coarse_grain * sample_diameters(g.diameter, count, rng)  # parcels of k^3 grains
         except PlacementError as exc:
             errors.append(f"{key}.diameter: {exc}")
             continue

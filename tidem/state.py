@@ -31,6 +31,7 @@ With gas (frozen between gas steps, see kernels/gas_coupling.py): gK (drag coeff
 [kg/s]), geps (voidage), gu (gas velocity [m/s]) and ggp (pressure gradient [Pa/m]) at the
 particle; with heat also gH (gas-particle conductance [W/K]) and gT (gas temperature [K]).
 With species (O2 on the gas grid): gY (O2 mass fraction of the gas at the particle).
+With gas and coarse-grained groups: cg (k: the parcel's diameter over its grains').
 With reactions: rx (index of the particle's reaction, -1 = inert), rsum (float64 totals of
 `kernels/reactions.py`: reacted mass [kg], O2 used [kg], heat released [J], latent heat [J],
 sensible heat leaving with reacted mass [J], heat handed back to the gas [J], particles gone,
@@ -196,6 +197,8 @@ def _place_gas_fields(p: _Placer, model: Model) -> None:
             p.per_particle((N,), name)
     if model.features.species:
         p.per_particle((N,), "gY")
+    if model.features.coarse_grain:
+        p.per_particle((N,), "cg")
 
 
 def _place_reaction_fields(p: _Placer, model: Model) -> None:
@@ -264,6 +267,8 @@ def _fill_particles(S: State, model: Model) -> None:
             S.rt0.fill(-1.0)
             S.rt1.fill(0.0)
     S.active.from_numpy(model.active0.astype(np.int32))
+    if feat.coarse_grain and feat.gas:
+        S.cg.from_numpy(model.coarse_grain)
     S.ident.from_numpy(np.arange(N, dtype=np.int32))
     S.wid.fill(-1)
     if feat.contact_time:

@@ -116,6 +116,7 @@ class ParticleGroup(Strict):
     temperature: Positive | None = None
     fixed: bool = False
     seed: int = Field(default=0, ge=0)
+    coarse_grain: float = Field(default=1.0, ge=1.0, le=10.0, allow_inf_nan=False)
 
     @model_validator(mode="before")
     @classmethod

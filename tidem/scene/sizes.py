@@ -17,7 +17,14 @@ def largest_diameter(dist) -> float:
     return dist.mean if dist.distribution == "normal" else dist.median
 
 
+def largest_parcel(group) -> float:
+    """Largest simulated diameter of a group [m]: its largest grain times `coarse_grain` (a
+    parcel of k d stands for k^3 grains of diameter d)."""
+    return group.coarse_grain * largest_diameter(group.diameter)
+
+
 def max_diameter(scene: Scene) -> float:
-    """Largest particle diameter the scene can produce [m], growing particles at their cap."""
+    """Largest particle diameter the scene can simulate [m] (parcels at their coarse-grained
+    size), growing particles at their cap."""
     grown = [r.max_diameter for r in scene.reactions if r.type == "polymerization" and r.growth]
-    return max([largest_diameter(g.diameter) for g in scene.particles] + grown)
+    return max([largest_parcel(g) for g in scene.particles] + grown)
