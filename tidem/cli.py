@@ -289,7 +289,8 @@ def check(
     path: Annotated[Optional[str], typer.Argument(help="Scene file or shipped scene name")] = None,
     set_: Sets = None,
 ):
-    """Validate a scene and print its derived numbers (particles, time steps, kernels, memory)."""
+    """Validate a scene and print its derived numbers (particles, time steps, kernels, memory); a scene with
+    errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
     from tidem.memory import format_bytes
 
     loaded = _load(path, set_)
