@@ -289,7 +289,8 @@ def check(
     path: Annotated[Optional[str], typer.Argument(help="Scene file or shipped scene name")] = None,
     set_: Sets = None,
 ):
-    """Validate a scene and print its derived numbers (particles, time steps, kernels, memory)."""
+    """Validate a scene and print its derived numbers (particles, time steps, kernels, memory); a scene with
+    errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
     from tidem.memory import format_bytes
 
     loaded = _load(path, set_)
@@ -429,7 +430,7 @@ def _sweep(path, vary, set_, out, workers, scheduler, reference, with_error: boo
         except SceneError as exc:
             _fail(f"variant {v.index} ({v.label}):\n{exc.render()}", 2)
     out_dir = out or Path("renders") / f"{loaded.name}_{'tradeoff' if with_error else 'sweep'}"
-    out_dir.mkdir(parents=True, exist_ok=True)
+    _writable(out_dir, "--out")
     typer.echo(f"tidem: {len(todo)} variants of {loaded.name} -> {out_dir}", err=True)
     results = tr.run_all(str(loaded.source), todo, out_dir, workers, scheduler, on_done=_variant_line, threads=threads)
     results, ref = tr.with_errors(results, reference) if with_error else (results, -1)
@@ -496,7 +497,7 @@ def _halve(path, key: str, tol: float, set_, out, threads=None) -> None:
     except SceneError as exc:
         _fail(exc.render(), 2)
     out_dir = out or Path("renders") / f"{loaded.name}_halving"
-    out_dir.mkdir(parents=True, exist_ok=True)
+    _writable(out_dir, "--out")
     runs, value = tr.halve(str(loaded.source), key, float(node), tol, out_dir, list(set_ or []), on_done=_variant_line,
                           threads=threads)
     tr.write_report(runs, -1, out_dir, with_error=False, stem="halving")

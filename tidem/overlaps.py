@@ -17,8 +17,10 @@ import numpy as np
 MAX_MESSAGES = 6  # overlapping group pairs and particles at walls reported one by one
 
 
-def overlapping_pairs(x: np.ndarray, radius: np.ndarray, lo, lengths, periodic) -> tuple[np.ndarray, ...]:
-    """(i, j, ratio) of every pair i < j whose spheres overlap, ratio = depth / min(r_i, r_j)."""
+def overlapping_pairs(x: np.ndarray, radius: np.ndarray, lo, lengths, periodic,
+                      above: float = 0.0) -> tuple[np.ndarray, ...]:
+    """(i, j, ratio) of every pair i < j whose spheres overlap by a ratio = depth / min(r_i, r_j)
+    greater than `above`."""
     n = len(x)
     none = np.zeros(0, np.int64)
     if n < 2:
@@ -32,8 +34,9 @@ def overlapping_pairs(x: np.ndarray, radius: np.ndarray, lo, lengths, periodic) 
 
     order = np.argsort(key(cell), kind="stable")
     keys = key(cell)[order]
-    found_i, found_j = [], []
-    for offset in itertools.product((-1, 0, 1), repeat=3):
+    found = []
+    half = [o for o in itertools.product((-1, 0, 1), repeat=3) if o >= (0, 0, 0)]  # o and -o meet the same pairs
+    for offset in half:  # kept per offset: only the pairs overlapping more than `above`
         near = cell + np.asarray(offset)
         ok = np.ones(n, bool)
         for a in range(3):
@@ -46,17 +49,22 @@ def overlapping_pairs(x: np.ndarray, radius: np.ndarray, lo, lengths, periodic) 
         many = np.where(ok, np.searchsorted(keys, k, "right") - start, 0)
         i = np.repeat(np.arange(n), many)
         j = order[np.repeat(start - np.cumsum(many) + many, many) + np.arange(many.sum())]
-        found_i.append(i[i < j])
-        found_j.append(j[i < j])
-    pair = np.unique(np.concatenate(found_i) * n + np.concatenate(found_j))
+        keep = i < j if offset == (0, 0, 0) else i != j  # a periodic axis of one cell wraps onto itself
+        i, j = i[keep], j[keep]
+        hit = _depth(x, radius, i, j, lengths, periodic) > above * np.minimum(radius[i], radius[j])
+        found.append(np.minimum(i[hit], j[hit]) * n + np.maximum(i[hit], j[hit]))
+    pair = np.unique(np.concatenate(found))  # a pair met through two offsets (few periodic cells) counts once
     i, j = pair // n, pair % n
+    return i, j, _depth(x, radius, i, j, lengths, periodic) / np.minimum(radius[i], radius[j])
+
+
+def _depth(x, radius, i, j, lengths, periodic) -> np.ndarray:
+    """Overlap depth r_i + r_j - |x_j - x_i| of pairs (minimum image on periodic axes) [m]."""
     d = x[j] - x[i]
     for a in range(3):
         if periodic[a]:
             d[:, a] -= lengths[a] * np.round(d[:, a] / lengths[a])
-    depth = radius[i] + radius[j] - np.linalg.norm(d, axis=1)
-    hit = depth > 0
-    return i[hit], j[hit], depth[hit] / np.minimum(radius[i[hit]], radius[j[hit]])
+    return radius[i] + radius[j] - np.linalg.norm(d, axis=1)
 
 
 def surface_overlaps(x: np.ndarray, radius: np.ndarray, planes: list[dict], tubes: list[dict], lengths,
@@ -79,6 +87,19 @@ def surface_overlaps(x: np.ndarray, radius: np.ndarray, planes: list[dict], tube
     return worst, [names[s] if s >= 0 else "" for s in which]
 
 
+def fills_apart(scene) -> bool:
+    """True when every group placed at the start fills a region and no two regions (grown by
+    the largest diameter) meet: the lattice of a fill has no overlaps, so no pair need be checked."""
+    from tidem.scene.checks import max_diameter
+
+    placed = [g for g in scene.particles if g.pour is None]
+    if any(g.region is None for g in placed):
+        return False
+    grow = max_diameter(scene)
+    return not any(all(a.region.min[k] - grow < b.region.max[k] and b.region.min[k] - grow < a.region.max[k]
+                       for k in range(3)) for n, a in enumerate(placed) for b in placed[n + 1:])
+
+
 def _where(scene, group: int, k: int) -> str:
     """The key of a particle: 'particles[0].positions[3]' or 'particle 12 of particles[0].region'."""
     if scene.particles[group].positions is not None:
@@ -93,11 +114,12 @@ def initial_overlaps(scene, x, radius, active, group, planes, tubes, lengths, pe
     idx = np.flatnonzero(active)
     first = {g: int(np.argmax(group == g)) for g in np.unique(group)}
     xs, rs = x[idx], radius[idx]
-    i, j, ratio = overlapping_pairs(xs, rs, scene.domain.min, lengths, periodic)
-    bad = ratio > limit
+    none = np.zeros(0, np.int64)
+    i, j, ratio = ((none, none, np.zeros(0)) if fills_apart(scene) else
+                   overlapping_pairs(xs, rs, scene.domain.min, lengths, periodic, above=limit))
     out: list[str] = []
     seen: dict[tuple[int, int], int] = {}
-    for a, b, r in sorted(zip(idx[i[bad]], idx[j[bad]], ratio[bad]), key=lambda t: -t[2]):
+    for a, b, r in sorted(zip(idx[i], idx[j], ratio), key=lambda t: -t[2]):
         ga, gb = int(group[a]), int(group[b])
         pair = (min(ga, gb), max(ga, gb))
         seen[pair] = seen.get(pair, 0) + 1

@@ -165,6 +165,8 @@ CORPUS = [
      "a file of that name exists"),
     ("out under a file", TINY, ["scene", FILE, "--out", FILE + "/run", "--no-render", "--quiet"], "--out",
      "choose another output folder"),
+    ("sweep into a file", TINY, ["sweep", FILE, "--vary", "numerics.t_end=0.1,0.2", "--out", FILE + "/sweep"],
+     "--out", "choose another output folder"),
     ("resume without checkpoint", TINY, ["scene", FILE, "--resume", "{dir}", "--no-render", "--quiet"], "--resume",
      "a run writes one"),
     ("corrupt checkpoint", TINY, ["scene", FILE, "--resume", "{dir}/run", "--no-render", "--quiet"], "--resume",

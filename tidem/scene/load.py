@@ -60,21 +60,24 @@ def resolve(name_or_path: str | None) -> Path:
 
 
 def read_toml(path: Path) -> dict:
-    """The TOML table of a scene file; SceneError if it is not readable UTF-8 TOML text."""
+    """The TOML table of a scene file; SceneError if it is not readable UTF-8 TOML text. The
+    first 4 KiB are looked at first, so a large binary file given by mistake is not read whole."""
     try:
-        data = path.read_bytes()
-        if data.startswith((b"\xff\xfe", b"\xfe\xff")):
-            raise SceneError(str(path), ["saved as UTF-16; save the file as UTF-8 (e.g. iconv -f utf-16 -t utf-8 "
-                                         "OLD.toml > NEW.toml, or 'UTF-8' in the editor's save dialog)"])
-        text = data.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
+        with open(path, "rb") as fh:
+            head = fh.read(4096)
+            if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+                raise SceneError(str(path), ["saved as UTF-16; save the file as UTF-8 (e.g. iconv -f utf-16 -t utf-8 "
+                                             "OLD.toml > NEW.toml, or 'UTF-8' in the editor's save dialog)"])
+            if b"\0" in head:
+                raise SceneError(str(path), ["this is a binary file, not a scene (TOML text); give the scene's "
+                                             ".toml file"])
+            text = (head + fh.read()).decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
     except OSError as exc:
         raise SceneError(str(path), [f"cannot read the file: {exc.strerror or exc}; check its permissions"]) from None
     except UnicodeDecodeError as exc:
         line = exc.object[:exc.start].count(b"\n") + 1
-        raise SceneError(str(path), [
-            "this is a binary file, not a scene (TOML text); give the scene's .toml file" if b"\0" in exc.object[:4096]
-            else f"not UTF-8 text (byte {exc.object[exc.start]:#04x} on line {line}); save the file as UTF-8, "
-                 "e.g. iconv -f latin1 -t utf-8 OLD.toml > NEW.toml"]) from None
+        raise SceneError(str(path), [f"not UTF-8 text (byte {exc.object[exc.start]:#04x} on line {line}); save the "
+                                     "file as UTF-8, e.g. iconv -f latin1 -t utf-8 OLD.toml > NEW.toml"]) from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
