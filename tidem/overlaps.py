@@ -90,7 +90,7 @@ def surface_overlaps(x: np.ndarray, radius: np.ndarray, planes: list[dict], tube
 def fills_apart(scene) -> bool:
     """True when every group placed at the start fills a region and no two regions (grown by
     the largest diameter) meet: the lattice of a fill has no overlaps, so no pair need be checked."""
-    from tidem.scene.checks import max_diameter
+    from tidem.scene.sizes import max_diameter
 
     placed = [g for g in scene.particles if g.pour is None]
     if any(g.region is None for g in placed):
