@@ -15,16 +15,8 @@ from typing import Annotated, Optional
 
 import typer
 
+from tidem.cli_common import Sets, app, build_or_exit, fail, load_scene, writable
 from tidem.scene.errors import SceneError
-
-EXIT_CODES = ("Exit codes: 0 done; 2 bad input (the message names the file, the key and the fix); 3 a run stopped "
-              "(output so far kept); 70 internal error (a bug: one line names a log file with the traceback, in "
-              "$TIDEM_LOG_DIR or the temporary folder's tidem-logs); 130 interrupted (output and checkpoint kept).")
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help=f"tidem: hot granular flows in Taichi.\n\n{EXIT_CODES}")
-
-Sets = Annotated[Optional[list[str]], typer.Option("--set", help="Override a scene key, e.g. --set outlet.speed=0.003")]
-
 
 def main() -> None:
     """The `tidem` command: the app, with an unexpected exception turned into one line and a log
@@ -36,29 +28,6 @@ def main() -> None:
 
         typer.echo(crash.one_line(exc, crash.write_log(exc)), err=True)
         sys.exit(crash.INTERNAL_ERROR)
-
-
-def _fail(message: str, code: int) -> None:
-    typer.echo(message, err=True)
-    raise typer.Exit(code)
-
-
-def _load(path: Optional[str], sets: Optional[list[str]]):
-    from tidem.scene.load import load
-
-    try:
-        return load(path, sets or [])
-    except SceneError as exc:
-        _fail(exc.render(), 2)
-
-
-def _model(loaded, smoke=False, t_end=None):
-    from tidem.model import build_model
-
-    try:
-        return build_model(loaded, smoke=smoke, t_end=t_end)
-    except SceneError as exc:
-        _fail(exc.render(), 2)
 
 
 @app.command()
@@ -76,25 +45,25 @@ def scene(
 ):
     """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
     if arch not in ("cpu", "cuda", "vulkan", "auto"):
-        _fail(f"--arch {arch}: choose cpu, cuda, vulkan or auto", 2)
+        fail(f"--arch {arch}: choose cpu, cuda, vulkan or auto", 2)
     if t_end is not None and not 0 < t_end < float("inf"):
-        _fail(f"--t-end {t_end}: the end time must be a finite number > 0 s", 2)
-    loaded = _load(path, set_)
+        fail(f"--t-end {t_end}: the end time must be a finite number > 0 s", 2)
+    loaded = load_scene(path, set_)
     from tidem.runtime import BackendUnavailable, ensure_taichi
 
     try:
         ensure_taichi(arch, loaded.scene.numerics.precision)
     except BackendUnavailable as exc:
-        _fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
+        fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
     except ValueError as exc:  # TIDEM_COMPILE
-        _fail(str(exc), 2)
-    model = _model(loaded, smoke=smoke, t_end=t_end)
+        fail(str(exc), 2)
+    model = build_or_exit(loaded, smoke=smoke, t_end=t_end)
     from tidem.run import run
 
     if resume is not None and out is not None and out.resolve() != resume.resolve():
-        _fail(f"--out {out} and --resume {resume}: a resumed run writes into the folder it resumes; drop --out", 2)
+        fail(f"--out {out} and --resume {resume}: a resumed run writes into the folder it resumes; drop --out", 2)
     out_dir = resume or out or Path("renders") / model.name
-    _writable(out_dir, "--resume" if resume is not None else "--out")
+    writable(out_dir, "--resume" if resume is not None else "--out")
     checkpoint = _checkpoint(resume, loaded, model) if resume is not None else None
     typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
                f"{f' (+{model.capacity - int(model.active0.sum())} to pour)' if model.pours else ''}, "
@@ -110,23 +79,9 @@ def scene(
         if background is not None and result.status != "interrupted":
             _finish_render(background, out_dir, model.name, quiet)
     if result.status == "failed":
-        _fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
+        fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
     if result.status == "interrupted":
-        _fail(result.message + f"; finished output is in {out_dir}", 130)
-
-
-def _writable(out_dir: Path, option: str) -> None:
-    """Exit 2 naming the option unless `out_dir` is (or can be made) a folder this process can write in."""
-    import tempfile
-
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-        tempfile.TemporaryFile(dir=out_dir).close()
-    except FileExistsError:
-        _fail(f"{option} {out_dir}: a file of that name exists; give a folder", 2)
-    except OSError as exc:
-        _fail(f"{option} {out_dir}: cannot write there ({exc.strerror or exc}); choose another output folder "
-              f"with --out", 2)
+        fail(result.message + f"; finished output is in {out_dir}", 130)
 
 
 def _checkpoint(run_dir: Path, loaded, model):
@@ -137,9 +92,9 @@ def _checkpoint(run_dir: Path, loaded, model):
         meta, arrays = checkpoint.load(run_dir)
         checkpoint.check_scene(meta, loaded.raw, model.features.precision)
     except checkpoint.CheckpointError as exc:
-        _fail(f"--resume {run_dir}: {exc}", 2)
+        fail(f"--resume {run_dir}: {exc}", 2)
     if meta["solver"]["t"] >= model.t_end * (1 - 1e-12):
-        _fail(f"--resume {run_dir}: the checkpoint is at {checkpoint.describe(meta)}, already at or past the end time "
+        fail(f"--resume {run_dir}: the checkpoint is at {checkpoint.describe(meta)}, already at or past the end time "
               f"{model.t_end:.6g} s; raise numerics.t_end (--t-end) to continue", 2)
     typer.echo(f"tidem: resuming from {checkpoint.describe(meta)}", err=True)
     return meta, arrays
@@ -195,7 +150,7 @@ def _finish_render(background, run_dir: Path, name: str, quiet: bool) -> None:
         error = background.finish(progress=_report(quiet))
     except KeyboardInterrupt:
         background.stop()
-        _fail(f"interrupted while rendering; the finished frames are in {run_dir / 'frames'} "
+        fail(f"interrupted while rendering; the finished frames are in {run_dir / 'frames'} "
               f"('tidem render {run_dir}' renders them all)", 130)
     if error:
         typer.echo(f"tidem: rendering failed: {error}", err=True)
@@ -224,14 +179,14 @@ def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_th
     try:
         prepare_offscreen()
     except RenderUnavailable as exc:
-        _fail(f"tidem render: {exc}", 2)
+        fail(f"tidem render: {exc}", 2)
     from tidem.render.movie import render_frames, style_for
 
     try:
         style = style_for(run_dir, field, clim, view, slice_thickness)
         render_frames(run_dir, style, progress=_report(False))
     except (ValueError, KeyError) as exc:
-        _fail(f"tidem render: {exc.args[0] if exc.args else exc}", 2)
+        fail(f"tidem render: {exc.args[0] if exc.args else exc}", 2)
     _movie_and_plots(run_dir, name, gif)
 
 
@@ -248,26 +203,26 @@ def render(
     import json
 
     if not (run_dir / "run.json").exists() or not (run_dir / "snapshots.pvd").exists():
-        _fail(f"{run_dir}: not a run folder (run.json and snapshots.pvd are missing)", 2)
+        fail(f"{run_dir}: not a run folder (run.json and snapshots.pvd are missing)", 2)
     try:
         name = json.loads((run_dir / "run.json").read_text()).get("scene", run_dir.name)
     except (ValueError, AttributeError):
-        _fail(f"{run_dir / 'run.json'}: not the JSON table a run writes; run the scene again to remake the folder", 2)
+        fail(f"{run_dir / 'run.json'}: not the JSON table a run writes; run the scene again to remake the folder", 2)
     clim = None
     if range_ is not None:
         try:
             lo, hi = (float(v) for v in range_.split(","))
         except ValueError:
-            _fail(f"--range {range_}: expected two numbers LOW,HIGH, e.g. --range 0,0.5", 2)
+            fail(f"--range {range_}: expected two numbers LOW,HIGH, e.g. --range 0,0.5", 2)
         if hi <= lo:
-            _fail(f"--range {range_}: HIGH must exceed LOW", 2)
+            fail(f"--range {range_}: HIGH must exceed LOW", 2)
         clim = (lo, hi)
     if view is not None and view not in ("front", "side", "top", "iso"):
-        _fail(f"--view {view}: choose front, side, top or iso", 2)
+        fail(f"--view {view}: choose front, side, top or iso", 2)
     from tidem.render.movie import snapshots
 
     if not snapshots(run_dir):
-        _fail(f"{run_dir}: the snapshot collection is empty; nothing to render", 2)
+        fail(f"{run_dir}: the snapshot collection is empty; nothing to render", 2)
     _render(run_dir, name, field, clim, view, slice_, gif or None)
 
 
@@ -293,8 +248,8 @@ def check(
     errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
     from tidem.memory import format_bytes
 
-    loaded = _load(path, set_)
-    model = _model(loaded)
+    loaded = load_scene(path, set_)
+    model = build_or_exit(loaded)
     f = model.features
     mass = float(model.mass.sum())
     sc = model.scales
@@ -342,7 +297,7 @@ def bench(
     try:
         counts = [int(v) for v in (sizes or ("2000,20000" if render else "10000,50000,200000")).split(",")]
     except ValueError:
-        _fail(f"--sizes {sizes}: expected comma-separated particle counts, e.g. --sizes 2000,20000", 2)
+        fail(f"--sizes {sizes}: expected comma-separated particle counts, e.g. --sizes 2000,20000", 2)
     if render:
         from tidem.render.bench import run_render_bench
         from tidem.render.gl import RenderUnavailable
@@ -350,14 +305,14 @@ def bench(
         try:
             run_render_bench(counts, threads, out)
         except RenderUnavailable as exc:
-            _fail(f"tidem bench --render: {exc}", 2)
+            fail(f"tidem bench --render: {exc}", 2)
         return
     from tidem.bench import run_matrix
 
     if precision not in ("float32", "float64", "both"):
-        _fail(f"--precision {precision}: choose float32, float64 or both", 2)
+        fail(f"--precision {precision}: choose float32, float64 or both", 2)
     if bed is not None and not bed.exists():
-        _fail(f"--bed {bed}: no such file", 2)
+        fail(f"--bed {bed}: no such file", 2)
     run_matrix(counts, ["float32", "float64"] if precision == "both" else [precision], steps, threads, out, bed)
 
 
@@ -372,17 +327,17 @@ def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, thre
     from tidem.solver import RunError
 
     if steps < 1 or warmup < 0:
-        _fail(f"--steps {steps} --warmup {warmup}: need at least one timed step and no negative warm-up", 2)
-    loaded = _load(path, sets)
+        fail(f"--steps {steps} --warmup {warmup}: need at least one timed step and no negative warm-up", 2)
+    loaded = load_scene(path, sets)
     ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
-    model = _model(loaded)
+    model = build_or_exit(loaded)
     start = _checkpoint(resume, loaded, model) if resume is not None else None
     try:
         result = profile_scene(loaded, steps, warmup, model, start)
     except SceneError as exc:
-        _fail(exc.render(), 2)
+        fail(exc.render(), 2)
     except RunError as exc:
-        _fail(f"{loaded.source}: the run failed during profiling: {exc}", 1)
+        fail(f"{loaded.source}: the run failed during profiling: {exc}", 1)
     typer.echo(f"{result['scene']}: {result['particles']} particles, {steps} steps after {warmup} warm-up, "
                f"{threads} threads, {result['particle_steps_per_s']:.3g} particle-steps/s")
     typer.echo(format_table(result["profile"]))
@@ -390,118 +345,4 @@ def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, thre
         out.write_text(json.dumps(result, indent=2))
 
 
-Varies = Annotated[Optional[list[str]], typer.Option("--vary", help="KEY=V1,V2,... (repeatable; all combinations run)")]
-Threads = Annotated[Optional[int], typer.Option(help="Taichi threads per variant (default: the worker's share of the cores)")]
-Observables = Annotated[Optional[str], typer.Option(
-    "--observables", help="NAME,NAME,... from the observables registry (default: the scene's `observables`)")]
-
-
-def _with_observables(set_: list[str] | None, names: str | None) -> list[str]:
-    """--observables a,b as the override observables = ["a", "b"] (validated like the scene)."""
-    if names is None:
-        return list(set_ or [])
-    listed = ", ".join(f'"{n.strip()}"' for n in names.split(",") if n.strip())
-    return list(set_ or []) + [f"observables=[{listed}]"]
-
-
-def _variant_line(res: dict) -> None:
-    figures = (f"{res['wall_s']:.1f} s, {res['particle_steps_per_s']:.3g} particle-steps/s"
-               if res["status"] == "finished" else res["message"].splitlines()[0][:160])
-    typer.echo(f"variant {res['index']:>2} [{res['status']}] {res['label']}: {figures}", err=True)
-
-
-def _sweep(path, vary, set_, out, workers, scheduler, reference, with_error: bool, threads=None) -> None:
-    from tidem import tradeoff as tr
-
-    loaded = _load(path, set_)
-    try:
-        todo = tr.variants(tr.parse_vary(vary or []), set_ or [])
-    except ValueError as exc:
-        _fail(str(exc), 2)
-    if with_error and len(todo) < 2:
-        _fail("tidem tradeoff: give at least one --vary with two or more values", 2)
-    if reference is not None and not 0 <= reference < len(todo):
-        _fail(f"--reference {reference}: choose a variant from 0 to {len(todo) - 1}", 2)
-    from tidem.scene.load import load
-
-    for v in todo:  # every variant must be a valid scene before anything runs
-        try:
-            load(str(loaded.source), v.overrides)
-        except SceneError as exc:
-            _fail(f"variant {v.index} ({v.label}):\n{exc.render()}", 2)
-    out_dir = out or Path("renders") / f"{loaded.name}_{'tradeoff' if with_error else 'sweep'}"
-    _writable(out_dir, "--out")
-    typer.echo(f"tidem: {len(todo)} variants of {loaded.name} -> {out_dir}", err=True)
-    results = tr.run_all(str(loaded.source), todo, out_dir, workers, scheduler, on_done=_variant_line, threads=threads)
-    results, ref = tr.with_errors(results, reference) if with_error else (results, -1)
-    tr.write_report(results, ref, out_dir, with_error)
-    typer.echo((out_dir / ("tradeoff.md" if with_error else "sweep.md")).read_text())
-
-
-@app.command()
-def tradeoff(
-    path: Annotated[str, typer.Argument(help="Scene file or shipped scene name")],
-    vary: Varies = None,
-    set_: Sets = None,
-    out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene>_tradeoff)")] = None,
-    workers: Annotated[Optional[int], typer.Option(help="Local Dask worker processes (default: one per core)")] = None,
-    scheduler: Annotated[Optional[str], typer.Option(help="Address of an existing Dask scheduler")] = None,
-    reference: Annotated[Optional[int], typer.Option(help="Variant the errors are measured against "
-                                                     "(default: most steps, then slowest)")] = None,
-    halve: Annotated[Optional[str], typer.Option(help="Halve this key until two runs agree within --tol")] = None,
-    tol: Annotated[float, typer.Option(help="Relative tolerance of --halve")] = 0.01,
-    threads: Threads = None,
-    observables: Observables = None,
-):
-    """Run variants of a scene in parallel and report wall time, particle-steps/s and observables with their
-    error against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png)."""
-    set_ = _with_observables(set_, observables)
-    loaded = _load(path, set_)
-    if not loaded.scene.observables:
-        _fail(f"tidem tradeoff: {loaded.name} declares no observables to compare; add `observables = [...]` to the "
-              "scene or give --observables NAME,... (see docs/scenes.md#observables)", 2)
-    if halve is not None:
-        _halve(path, halve, tol, set_, out, threads)
-        return
-    _sweep(path, vary, set_, out, workers, scheduler, reference, with_error=True, threads=threads)
-
-
-@app.command()
-def sweep(
-    path: Annotated[str, typer.Argument(help="Scene file or shipped scene name")],
-    vary: Varies = None,
-    set_: Sets = None,
-    out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene>_sweep)")] = None,
-    workers: Annotated[Optional[int], typer.Option(help="Local Dask worker processes (default: one per core)")] = None,
-    scheduler: Annotated[Optional[str], typer.Option(help="Address of an existing Dask scheduler")] = None,
-    threads: Threads = None,
-    observables: Observables = None,
-):
-    """A parameter study: one run folder per variant and one summary table (sweep.csv, sweep.md)."""
-    _sweep(path, vary, _with_observables(set_, observables), out, workers, scheduler, None, with_error=False,
-           threads=threads)
-
-
-def _halve(path, key: str, tol: float, set_, out, threads=None) -> None:
-    from tidem import tradeoff as tr
-    from tidem.scene.load import load
-
-    loaded = _load(path, set_)
-    node = loaded.scene.model_dump()
-    for part in key.split("."):
-        node = node.get(part) if isinstance(node, dict) else None
-    if not isinstance(node, (int, float)) or isinstance(node, bool) or node <= 0:
-        _fail(f"--halve {key}: needs a positive number in the scene (found {node!r})", 2)
-    try:
-        load(str(loaded.source), list(set_ or []) + [f"{key}={node / 2!r}"])
-    except SceneError as exc:
-        _fail(exc.render(), 2)
-    out_dir = out or Path("renders") / f"{loaded.name}_halving"
-    _writable(out_dir, "--out")
-    runs, value = tr.halve(str(loaded.source), key, float(node), tol, out_dir, list(set_ or []), on_done=_variant_line,
-                          threads=threads)
-    tr.write_report(runs, -1, out_dir, with_error=False, stem="halving")
-    if value is None:
-        _fail(f"--halve {key}: successive results did not agree within {tol:g} after {len(runs)} runs; "
-              f"see {out_dir}", 3)
-    typer.echo(f"converged: {key} = {value:g} (halving once more changed every observable by less than {tol:g})")
+from tidem import cli_studies  # noqa: E402,F401  tradeoff and sweep, registered last to be listed after the others

@@ -1,0 +1,60 @@
+"""What every `tidem` command shares: the Typer app with the exit codes in its help, the --set
+option, and the exits with code 2 for bad input (a scene that does not validate or build, an
+output folder that cannot be written)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from tidem.scene.errors import SceneError
+
+EXIT_CODES = ("Exit codes: 0 done; 2 bad input (the message names the file, the key and the fix); 3 a run stopped "
+              "(output so far kept); 70 internal error (a bug: one line names a log file with the traceback, in "
+              "$TIDEM_LOG_DIR or the temporary folder's tidem-logs); 130 interrupted (output and checkpoint kept).")
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help=f"tidem: hot granular flows in Taichi.\n\n{EXIT_CODES}")
+
+Sets = Annotated[Optional[list[str]], typer.Option("--set", help="Override a scene key, e.g. --set outlet.speed=0.003")]
+
+
+def fail(message: str, code: int) -> None:
+    """Print `message` to stderr and exit with `code`."""
+    typer.echo(message, err=True)
+    raise typer.Exit(code)
+
+
+def load_scene(path: Optional[str], sets: Optional[list[str]]):
+    """The validated scene of a file or shipped name with --set overrides, or exit 2."""
+    from tidem.scene.load import load
+
+    try:
+        return load(path, sets or [])
+    except SceneError as exc:
+        fail(exc.render(), 2)
+
+
+def build_or_exit(loaded, smoke=False, t_end=None):
+    """The Model of a loaded scene, or exit 2 with the problems `build_model` finds."""
+    from tidem.model import build_model
+
+    try:
+        return build_model(loaded, smoke=smoke, t_end=t_end)
+    except SceneError as exc:
+        fail(exc.render(), 2)
+
+
+def writable(out_dir: Path, option: str) -> None:
+    """Exit 2 naming the option unless `out_dir` is (or can be made) a folder this process can write in."""
+    import tempfile
+
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=out_dir).close()
+    except FileExistsError:
+        fail(f"{option} {out_dir}: a file of that name exists; give a folder", 2)
+    except OSError as exc:
+        fail(f"{option} {out_dir}: cannot write there ({exc.strerror or exc}); choose another output folder "
+              f"with --out", 2)
