@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import taichi as ti
 
+CLOSED, INTERIOR, INLET, OUTLET = 0, 1, 2, 3  # kinds of a face: wall, between cells, inlet, outlet
+
 
 @dataclass(frozen=True)
 class GasGrid:

@@ -22,7 +22,7 @@ Sublimation (source 2 eq. 6): a particle at T_s turns the heat it receives into 
   dm = q dt / L_u (equivalently dR/dt = -q / (rho_s L_u 4 pi R^2)), with q its whole heat rate
   (gas exchange with Nu = 2 in the Stokes regime, from `gas_coupling`); below T_s it warms, and
   a step that crosses T_s puts the excess into vapour. The heat comes from the gas through the
-  implicit exchange of `gas_flow.energy` (two-way: a loaded plasma cools). A particle past
+  implicit exchange of `gas_energy.energy` (two-way: a loaded plasma cools). A particle past
   `exit` (z) leaves the domain unsublimated.
 
 Energy bookkeeping (what makes the balances close to rounding): the kick advances

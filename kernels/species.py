@@ -3,7 +3,7 @@
 Finite volume, explicit, conservative (one gas step dt, cell volume V, gas density rho):
   rho [eps^{n+1} Y^{n+1} - eps^n Y^n] V / dt + rho sum_f (eps u)_f A_f Y_up
       = rho D sum_f eps_f A_f (Y_nb - Y) / h_f - S / dt,
-advection upwind with the same face fluxes as the gas energy (`gas_flow.upwind`), Fickian
+advection upwind with the same face fluxes as the gas energy (`gas_energy.upwind`), Fickian
 diffusion across interior faces only (no diffusive flux through walls, inlet or outlet), and
 S [kg] the O2 particles consumed in the cell since the last gas step (`o2_sink`, deposited by
 `kernels/reactions.py`). Stable for D dt sum(1/h^2) <= 1/2 (refused at set-up) and while a

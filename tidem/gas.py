@@ -20,7 +20,8 @@ import taichi as ti
 
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.gas_coupling import make_coupling_kernels
-from tidem.kernels.gas_flow import CLOSED, INLET, SERIAL_CELLS, make_flow_kernels
+from tidem.kernels.gas_flow import SERIAL_CELLS, make_flow_kernels
+from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
 from tidem.gas_fields import allocate_gas_fields
 from tidem.gas_geometry import face_kinds, gas_grid, inlet_map, solid_cells, tube_walls

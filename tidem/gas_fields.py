@@ -1,5 +1,6 @@
 """The gas grid's Taichi fields, in one SNode tree (`GasPhase.release` frees it); the equations
-that use them are in `kernels/gas_flow.py`, `kernels/gas_coupling.py` and `kernels/species.py`.
+that use them are in `kernels/gas_flow.py`, `kernels/gas_energy.py`, `kernels/gas_coupling.py` and
+`kernels/species.py`.
 
 Per cell [cells]: eps and eps_old (voidage now and at the last gas step), solid_vol (particle
 volume deposited [m^3]), p (pressure [Pa]), rhs, diag and cg_r, cg_d, cg_q (the pressure

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tidem.kernels.gas_flow import CLOSED, INLET, INTERIOR, OUTLET
+from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET
 from tidem.kernels.gas_grid import GasGrid
 
 
