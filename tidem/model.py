@@ -66,7 +66,7 @@ class Model:
     reaction_index: np.ndarray | None = None
     reaction_constants: list | None = None
     averaging: AveragingLayout | None = None
-    coarse_grain: np.ndarray | None = None  # k of each particle's group: a parcel of k^3 grains
+    coarse_grain: np.ndarray | None = None  # k of each particle's group: a parcel of k^3 grains (1: a grain)
 
     @property
     def scene(self):
@@ -175,7 +175,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
         averaging=averaging_layout(scene),
-        coarse_grain=grain_scale if any(g.coarse_grain != 1.0 for g in scene.particles) else None,
+        coarse_grain=grain_scale,
     )
     too_big = memory_refusal(model)
     if too_big:
