@@ -106,10 +106,13 @@ def _live_view(model):
     from tidem.render.settings import render_settings
 
     problem = display_problem()
-    if problem:
-        typer.echo(f"tidem: --view: {problem}; running without the live view", err=True)
-        return None
-    return LiveView(model, render_settings(model))
+    if problem is None:
+        try:
+            return LiveView(model, render_settings(model))
+        except RuntimeError as exc:  # Taichi's window creation (the display went away, no GL visual)
+            problem = f"the window could not be opened ({str(exc).splitlines()[0][:120]})"
+    typer.echo(f"tidem: --view: {problem}; running without the live view", err=True)
+    return None
 
 
 def _background(out_dir: Path, no_render: bool):

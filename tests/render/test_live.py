@@ -29,13 +29,23 @@ def xvfb():
         if os.environ.get("TIDEM_REQUIRE_XVFB"):
             pytest.fail("Xvfb is required here (apt-get install -y --no-install-recommends xvfb xauth)")
         pytest.skip("Xvfb is not installed (apt-get install -y --no-install-recommends xvfb xauth)")
-    r, w = os.pipe()
-    server = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-screen", "0", f"{SCREEN[0]}x{SCREEN[1]}x24",
-                               "-nolisten", "tcp"], pass_fds=(w,), stderr=subprocess.DEVNULL)
-    os.close(w)
-    with os.fdopen(r) as fh:
-        display = f":{fh.readline().strip()}"
-    yield display
+    # Each xdist worker starts at a display number of its own: with -displayfd alone, two
+    # workers raced for :0 as one server shut down while the other started (CI, 2026-11-25).
+    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw") or 0)
+    for number in range(90 + 10 * worker, 100 + 10 * worker):
+        r, w = os.pipe()
+        server = subprocess.Popen(["Xvfb", f":{number}", "-displayfd", str(w), "-screen", "0",
+                                   f"{SCREEN[0]}x{SCREEN[1]}x24", "-nolisten", "tcp"],
+                                  pass_fds=(w,), stderr=subprocess.DEVNULL)
+        os.close(w)
+        with os.fdopen(r) as fh:
+            ready = fh.readline().strip()  # the number once it serves; empty if it quit (display taken)
+        if ready:
+            break
+        server.wait()
+    else:
+        pytest.fail("no free X display number for Xvfb in :90-:99 (+10 per xdist worker)")
+    yield f":{number}"
     server.terminate()
     server.wait()
 
@@ -142,3 +152,19 @@ def test_scene_view_runs_with_a_window_and_without_a_display(xvfb, monkeypatch, 
     assert result.exit_code == 0, result.output
     lines = [ln for ln in result.output.splitlines() if "--view" in ln]
     assert lines == ["tidem: --view: no display ($DISPLAY is not set); running without the live view"]
+
+
+def test_scene_view_goes_on_headless_when_the_window_fails(monkeypatch, tmp_path):
+    import tidem.render.live as live
+
+    def no_window(*_args):
+        raise RuntimeError("[x11.cpp:create_window@154] Taichi fails to create a window.\nmore")
+
+    monkeypatch.setattr(live, "display_problem", lambda: None)
+    monkeypatch.setattr(live, "LiveView", no_window)
+    args = ["scene", "sphere_impact", "--smoke", "--quiet", "--no-render", "--view", "--out", str(tmp_path)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    lines = [ln for ln in result.output.splitlines() if "--view" in ln]
+    assert lines == ["tidem: --view: the window could not be opened ([x11.cpp:create_window@154] Taichi fails to "
+                     "create a window.); running without the live view"]
