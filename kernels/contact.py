@@ -41,7 +41,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
-                      surface_reach: float = 0.0):
+                      surface_reach: float = 0.0, grain_scale: float = 1.0):
     """Return a namespace of the two passes: kernels `own(n, t, dt)` and `partner(n, t)` (None
     without pairs), and `gather(i, t)`, the partner pass for one particle as a Taichi func (for
     a kernel that fuses it with the rest of the step, `kernels/integrate.py`); `single_material` loads the pair parameters once per
@@ -60,7 +60,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     `cull` (bit s: surface s does not move) lets each particle skip the static surfaces farther
     than `surface_reach` (skin plus the conduction reach) at the last neighbour build, as marked
     in S.near by the kernel `mark_near(n)` (None without culling); a particle far from every
-    wall and tube then costs no surface evaluation at all."""
+    wall and tube then costs no surface evaluation at all. `grain_scale` k > 1: every particle
+    is a parcel of k^3 grains (one k per scene with heat) and conducts as those grains do
+    (kernels/heat.py)."""
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
@@ -68,6 +70,13 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     g = ti.Vector(list(gravity))
     n_surf = n_planes + n_tubes
     zero3 = ti.Vector([0.0, 0.0, 0.0])
+    cg = float(grain_scale)
+
+    @ti.func
+    def lens(p, r_eff, gap, delta_f):
+        """The gas-lens conductance; a parcel's is that of its grains' k lenses (k H(R*/k, h/k, delta_f/k)),
+        i.e. H(R*, h/k, delta_f/k) since H is proportional to R*."""
+        return pfp_conductance(p, r_eff, gap / cg, delta_f / cg)
 
     @ti.func
     def separation(xi, ri, j):
@@ -99,7 +108,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         p_pair = pair_params(mat_i, j, p_same)
         h_pair = spot_conductance(p_pair, r_eff, delta)
         if ti.static(pfp):
-            h_pair += pfp_conductance(p_pair, r_eff, -delta, fluid_layer * ti.min(ri, rj))
+            h_pair += lens(p_pair, r_eff, -delta, fluid_layer * ti.min(ri, rj))
         return h_pair * (S.T[j] - S.T[i])
 
     @ti.func
@@ -108,7 +117,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         flow = 0.0
         gap = ti.sqrt(dist2) - rsum
         if gap < fluid_layer * ti.min(ri, rj):
-            h_gas = pfp_conductance(pair_params(mat_i, j, p_same), ri * rj / rsum, gap, fluid_layer * ti.min(ri, rj))
+            h_gas = lens(pair_params(mat_i, j, p_same), ri * rj / rsum, gap, fluid_layer * ti.min(ri, rj))
             flow = h_gas * (S.T[j] - S.T[i])
         return flow
 
@@ -306,7 +315,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                                     if S.surf_T[s] > 0.0:
                                         b = tube_bin(s, nrm)
                                         t_wall = wall_temperature(s, b)
-                                        flow = wall_conductance(S.ps[mat_i, s], ri, delta) * (t_wall - S.T[i])
+                                        flow = wall_conductance(S.ps[mat_i, s], ri, delta, cg) * (t_wall - S.T[i])
                                         if ti.static(radiation):
                                             flow += wall_radiation(S.ps[mat_i, s], ri, t_wall, S.T[i])
                                         heat_in += flow
@@ -324,7 +333,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             if ti.static(pfp):
                                 if -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
                                     b = tube_bin(s, nrm)
-                                    flow = pfp_conductance(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
+                                    flow = cg * lens(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
                                         wall_temperature(s, b) - S.T[i])
                                     heat_in += flow
                                     surface_heat(s, b, flow)

@@ -21,6 +21,11 @@
   surface exchanges grey radiation over the same share of the wall, pi d^2 / 4,
       q = C sigma pi r^2 (T_w^4 - T_i^4),  C = 1 / (1/eps_p + 1/eps_w - 1)
   (two parallel grey surfaces; Schluender's wall-to-first-layer exchange).
+Coarse-grained parcels (diameter k d_g for k^3 grains; docs/design/coarse_graining.md): the
+contact spot needs no change (a = k a_g, so H/d and the bed's conductivity are kept); the gas
+lens between parcels is k lenses of the grains, k H(R*/k, h/k, delta_f/k); to a wall a parcel
+carries the k^2 grains that cover its share of the wall: spot and Schluender term as in
+`wall_conductance`, lens k^2 H(r/k, h/k, delta_f/k); radiation over pi r^2 already scales as k^2.
 The heat rate into particle i is q_i = sum_j H_ij (T_j - T_i) + sum_walls H_iw (T_w - T_i);
 a pair's H is computed identically from both sides, so the pair terms cancel exactly and
 an isolated bed keeps its heat to rounding.
@@ -69,12 +74,14 @@ def spot_conductance(p, r_eff, delta):
 
 
 @ti.func
-def wall_conductance(p, r, delta):
-    """Contact spot plus Schluender's gas-gap coefficient over pi d^2 / 4 [W/K]."""
-    d = 2.0 * r
+def wall_conductance(p, r, delta, k):
+    """Contact spot plus Schluender's gas-gap coefficient over pi d^2 / 4 [W/K]; for a parcel of
+    k^3 grains (radius r = k r_g) the k^2 grains that cover its wall area, each at the
+    parcel's relative overlap: k^2 H_wall(r/k, delta/k) = k 2 k_s a + alpha_WP(d/k) pi r^2."""
+    d = 2.0 * r / k
     x = 2.0 * p[GAP] / d
     alpha = 4.0 * p[LAMBDA_GAS] / d * ((1.0 + x) * ti.log(1.0 + 1.0 / x) - 1.0)
-    return spot_conductance(p, r, delta) + alpha * 3.141592653589793 * r * r
+    return k * spot_conductance(p, r, delta) + alpha * 3.141592653589793 * r * r
 
 
 @ti.func

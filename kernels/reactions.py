@@ -25,6 +25,13 @@ Sublimation (source 2 eq. 6): a particle at T_s turns the heat it receives into 
   implicit exchange of `gas_energy.energy` (two-way: a loaded plasma cools). A particle past
   `exit` (z) leaves the domain unsublimated.
 
+Coarse-grained parcels (rc["cg"] = k: a parcel of k d_g holds k^3 grains; docs/design/
+coarse_graining.md): every rate is one grain's, evaluated with the grain diameter d_g = d / k
+(char film and surface, growth cap), times k^3; polymerization heat (proportional to mass) and
+sublimation (driven by the gas heat, already per grain in `gas_coupling`) scale by themselves.
+Since the parcel's mass and heat capacity carry k^3 too, each grain's history (T, d_g, m_g) is
+kept. Counts of particles burnt out or escaped are counts of grains (k^3 per parcel).
+
 Energy bookkeeping (what makes the balances close to rounding): the kick advances
 T += dt q / (m c) with the new mass, so reaction heat lands exactly in the particle; the
 sensible heat c T dm of the mass that reacted is counted in rsum[ENTHALPY_OUT]; a removed
@@ -97,13 +104,13 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         @ti.func
         def char(i, t, dt, steps_left, T, m, c):
             gone = 0
-            d = 2.0 * S.radius[i]
+            d = 2.0 * S.radius[i] / rc["cg"]  # the grain's diameter
             p_o2 = ti.max(S.gY[i], 0.0) * rc["x_per_y"] * rc["pressure"]
             k_s = rc["A"] * ti.exp(-rc["E_R"] / T)
             w = (S.gu[i] - S.v[i]).norm()
             sh = 2.0 + 0.6 * ti.sqrt(rho_g * w * d / mu) * rc["sc"] ** (1.0 / 3.0)
             k_d = rc["film"] * sh * rc["D"] / (d * 0.5 * (T + S.gT[i]))
-            rate = math.pi * d * d * p_o2 / (1.0 / k_s + 1.0 / k_d)
+            rate = rc["cg"] ** 3 * math.pi * d * d * p_o2 / (1.0 / k_s + 1.0 / k_d)
             dm = ti.min(rate * dt, m)
             if dm > 0.0:
                 o2 = dm * rc["o2_per_c"]
@@ -114,7 +121,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                 S.rsum[ENTHALPY_OUT] += c * T * dm
                 heat = S.q[i] + dm * rc["heat_per_c"] / dt
                 if dm >= m:
-                    S.rsum[GONE] += 1.0
+                    S.rsum[GONE] += rc["cg"] ** 3
                     remove(i, t, dt, steps_left, heat * dt)
                     gone = 1
                 else:
@@ -131,7 +138,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         def poly(i, t, dt, steps_left, T, m, c):
             active = True
             if ti.static(grow):
-                active = 2.0 * S.radius[i] < rc["d_max"]
+                active = 2.0 * S.radius[i] / rc["cg"] < rc["d_max"]
             if active:
                 q = rc["k"] * ti.exp(-rc["E_R"] * (1.0 / T - 1.0 / rc["T_ref"])) * m * rc["enthalpy"]
                 S.q[i] += q
@@ -150,7 +157,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         def subl(i, t, dt, steps_left, T, m, c):
             gone = 0
             if S.x[i][2] > rc["exit"]:
-                S.rsum[ESCAPED] += 1.0
+                S.rsum[ESCAPED] += rc["cg"] ** 3
                 S.rsum[MASS_ESCAPED] += m
                 S.rsum[ENTHALPY_OUT] += c * T * m
                 remove(i, -t, dt, steps_left, S.q[i] * dt)
@@ -164,7 +171,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                     S.rsum[LATENT] += dm * rc["L"]
                     S.rsum[ENTHALPY_OUT] += c * T_s * dm
                     if dm >= m:
-                        S.rsum[GONE] += 1.0
+                        S.rsum[GONE] += rc["cg"] ** 3
                         remove(i, t, dt, steps_left, S.q[i] * dt - dm * rc["L"] - c * (T_s - T) * m)
                         gone = 1
                     else:

@@ -113,17 +113,98 @@ def test_bad_coarse_grain_values_are_named(edit, fragment):
     assert fragment in str(err.value)
 
 
-def test_unscaled_models_with_parcels_are_refused():
+def test_mixed_coarse_grain_with_heat_is_refused():
     from tidem.scene.load import validate
 
     raw = heated_bed(coarse_grain=2.0)
-    raw["heat"]["fluid_layer"] = 0.4
-    raw["domain"]["wall_temperature"] = 350.0
+    raw["particles"].append({**raw["particles"][0], "name": "q", "coarse_grain": 1.5,
+                             "region": {"min": [0, 0, 0.02], "max": [0.02, 0.02, 0.03]}})
     with pytest.raises(SceneError) as err:
         validate(raw)
-    msg = str(err.value)
-    assert "particles[0].coarse_grain: heat from walls and tubes (domain.wall_temperature)" in msg
-    assert "particles[0].coarse_grain: the gas-lens conduction between parcels is not scaled yet" in msg
-    raw["heat"]["fluid_layer"] = 0.0
-    del raw["domain"]["wall_temperature"]
-    validate(raw)  # contact-spot conduction alone is scaled
+    assert "particles[*].coarse_grain: with [heat] every group needs the same coarse_grain" in str(err.value)
+    raw["particles"][1]["coarse_grain"] = 2.0
+    validate(raw)
+    del raw["heat"]
+    raw["particles"][1]["coarse_grain"] = 1.5
+    validate(raw)  # mixed k without heat: parcel geometry per group
+
+
+LENS = 0.4  # heat.fluid_layer
+
+
+def heat_rate(solver_for, k: float, case: str, d: float = 1e-3) -> float:
+    """Heat rate [W] into a cold (300 K) fixed particle of grains d at k: from a 400 K twin
+    ('pair'; touching at 1 % relative overlap, or 'pair_gap' at a gap of 0.1 % of the radius,
+    inside the smallest gap s_min where the lens is not self-similar) or from the 400 K bottom
+    wall ('wall'; 'wall_gap' at 5 % of the radius)."""
+    r = 0.5 * k * d
+    shift = {"pair": -0.01, "pair_gap": 0.001, "wall": -0.01, "wall_gap": 0.05}[case] * r
+    pair = case.startswith("pair")
+    positions = [[0.01, 0.01, 0.01], [0.01, 0.01, 0.01 + 2 * r + 2 * shift]] if pair else [[0.01, 0.01, r + shift]]
+    group = {"material": "sand", "diameter": {"value": d}, "coarse_grain": k, "fixed": True}
+    groups = [{"name": "cold", **group, "temperature": 300.0, "positions": positions[:1]}]
+    walls = [{"point": [0, 0, 0], "normal": [0, 0, 1], "temperature": 400.0}]
+    if pair:
+        groups.append({"name": "hot", **group, "temperature": 400.0, "positions": positions[1:]})
+        walls = []
+    raw = make_scene(
+        domain={"min": [0, 0, 0], "max": [0.02, 0.02, 0.02], "walls": "none", "gravity": [0, 0, 0]},
+        materials={"sand": SAND}, particles=groups, walls=walls,
+        heat={"gas_conductivity": 0.026, "initial_temperature": 300.0, "fluid_layer": LENS, "roughness": 1e-6},
+    )
+    s = solver_for(raw)
+    return float(s.state.q.to_numpy()[0])
+
+
+@pytest.mark.parametrize("case, power", [("pair", 1), ("pair_gap", 1), ("wall", 2), ("wall_gap", 2)])
+def test_parcels_conduct_as_the_grains_they_stand_for(solver_for, case, power):
+    """At the same relative overlap or gap, a pair of k = 2 parcels conducts k times a pair of
+    grains (contact spot and gas lens: the bed's conductivity H/d is kept), and a parcel on a
+    wall k^2 times a grain (the k^2 grains on its share of the wall: flux per wall area kept)."""
+    grain, parcel = heat_rate(solver_for, 1.0, case), heat_rate(solver_for, 2.0, case)
+    assert grain > 0.0
+    assert parcel / grain == pytest.approx(2.0**power, rel=1e-9)
+
+
+def test_a_char_parcel_burns_k3_grains_at_the_grains_rate(solver_for):
+    """First step, still gas at 1123 K: the carbon a k = 2 parcel of 1 mm grains burns is 8
+    times one grain's series rate (Field kinetics and film with the grain's diameter)."""
+    from tests.kernels.test_reactions import char_scene, series_rate
+    from tidem.reactions import REACTED
+
+    raw = char_scene([[0.008, 0.008, 0.008]], size=0.016)
+    raw["particles"][0]["coarse_grain"] = 2.0
+    raw["gas"]["cell_size"] = 0.008
+    s = solver_for(raw)
+    s.step()
+    burnt = s.state.rsum.to_numpy()[REACTED] / s.dt
+    assert burnt == pytest.approx(8 * series_rate(1e-3, 1123.0)[0], rel=1e-9)
+    assert series_rate(2e-3, 1123.0)[0] * 8 > 1.2 * burnt, "the parcel's own size would burn clearly faster"
+
+
+def test_a_sublimating_parcel_lasts_its_grains_d2_time(solver_for):
+    """Nu = 2 in still gas held at 8000 K: a k = 2 parcel of 10 um grains is gone after the
+    grain's t = rho L d^2 / (8 k dT) (2 %), a quarter of the time its own size would take."""
+    from tests.kernels.test_reactions import K_AR, L_U, T_S, plasma_scene
+
+    raw = plasma_scene([[0.001, 0.001, 0.001]], cp=520.0 * 1e4)
+    raw["particles"][0]["coarse_grain"] = 2.0
+    s = solver_for(raw)
+    while s.state.active.to_numpy()[0] and s.steps < 5000:
+        s.step()
+    expected = 2200.0 * L_U * 1e-10 / (8 * K_AR * (8000.0 - T_S))
+    t_sub = s.state.rt1.to_numpy()[0] - s.state.rt0.to_numpy()[0] + s.dt
+    assert t_sub == pytest.approx(expected, rel=0.02)
+
+
+@pytest.mark.parametrize("k, parcels", [(1.0, 800), (2.0, 100), (1.5, 237)])
+def test_count_counts_grains_so_the_bed_mass_stays(k, parcels):
+    """`count` of a region fill is in grains: k^3 grains per parcel, the bed's mass kept to one parcel."""
+    from tidem.model import build_model
+    from tidem.scene.load import validate
+
+    raw = heated_bed(coarse_grain=k, count=800)
+    model = build_model(validate(raw))
+    assert len(model.radius) == parcels
+    grain_mass = 2500.0 * math.pi * 1e-9 / 6
+    assert model.mass.sum() == pytest.approx(800 * grain_mass, rel=0.5 * k**3 / 800)

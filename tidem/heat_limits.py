@@ -12,40 +12,44 @@ import numpy as np
 from tidem.kernels.heat import STEFAN_BOLTZMANN, schluender_alpha_wp
 
 
-def wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces) -> np.ndarray:
+def wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces, grain_scale=1.0) -> np.ndarray:
     """Largest conductance [W/K] between each particle and a heated surface it touches:
     Schluender's alpha_WP pi d^2 / 4, the contact spot 2 k a at the largest allowed overlap,
-    and with radiation its linearisation 4 sigma T^3 pi r^2 at the hottest fixed temperature."""
+    and with radiation its linearisation 4 sigma T^3 pi r^2 at the hottest fixed temperature;
+    a parcel of k^3 grains (`grain_scale` k) carries k^2 grains' (kernels/heat.wall_conductance)."""
     h = scene.heat
     delta = scene.numerics.max_overlap * radius
     k = np.array([mats[m].conductivity or 0.0 for m in mat_names])[material]
-    out = schluender_alpha_wp(h.gas_conductivity, 2 * radius, h.gas_mean_free_path + h.roughness) * np.pi * radius**2
-    out = out + 2 * k * np.sqrt(radius * delta)
+    grain_d = 2 * radius / grain_scale
+    out = schluender_alpha_wp(h.gas_conductivity, grain_d, h.gas_mean_free_path + h.roughness) * np.pi * radius**2
+    out = out + grain_scale * 2 * k * np.sqrt(radius * delta)
     if h.radiation:
         hottest = max([s["T"] for s in surfaces if s["T"] is not None] + [h.initial_temperature])
         out = out + 4 * STEFAN_BOLTZMANN * hottest**3 * np.pi * radius**2
     return out
 
 
-def thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors, surfaces) -> float:
+def thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors, surfaces, grain_scale=1.0) -> float:
     """Stability limit of the explicit temperature update: min over particles of m c / H_sum,
     with H_sum the conductance of a full row of contacts at the largest allowed overlap
     (contact spot 2 k a, a = sqrt(R* delta)) plus one wall contact (`wall_conductance_bound`),
-    and with particle-fluid-particle conduction up to 20 neighbours at its touching value."""
+    and with particle-fluid-particle conduction up to 20 neighbours at its touching value
+    (for parcels, their grains' lenses: delta_f / k in the logarithm)."""
     h = scene.heat
     delta = scene.numerics.max_overlap * radius
     k = np.array([mats[m].conductivity or 0.0 for m in mat_names])[material]
     a = np.sqrt(0.5 * radius * delta)
-    wall = wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces)
+    wall = wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces, grain_scale)
     conductance = min(max_neighbors, 12) * 2 * k * a + wall
     if h.fluid_layer > 0:  # every neighbour in the lens at the smallest gap
         s_min = h.gas_mean_free_path + h.roughness
-        lens = 2 * np.pi * h.gas_conductivity * 0.5 * radius * (1 + np.log(np.maximum(h.fluid_layer * radius / s_min, 1)))
+        layer = h.fluid_layer * radius / grain_scale
+        lens = 2 * np.pi * h.gas_conductivity * 0.5 * radius * (1 + np.log(np.maximum(layer / s_min, 1)))
         conductance += min(max_neighbors, 20) * lens
     return float(np.min(heat_cap / np.maximum(conductance, 1e-300)))
 
 
-def foil_step_errors(scene, mats, mat_names, material, radius, surfaces, dt) -> list[str]:
+def foil_step_errors(scene, mats, mat_names, material, radius, surfaces, dt, grain_scale=1.0) -> list[str]:
     """The explicit foil update of a heated-foil tube or wall (kernels/integrate.py) is stable
     while dt (h_bed + 2 G / ds^2) / C_A <= 1: C_A the foil's heat capacity per area, h_bed the
     largest bed-side conductance per area (the best wall conductance over the wall area of a
@@ -54,7 +58,7 @@ def foil_step_errors(scene, mats, mat_names, material, radius, surfaces, dt) -> 
     foils = [s for s in surfaces if s.get("flux") is not None]
     if not foils:
         return []
-    wall = wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces)
+    wall = wall_conductance_bound(scene, mats, mat_names, material, radius, surfaces, grain_scale)
     h_bed = float(np.max(wall / (2 * math.sqrt(3) * radius**2)))
     errs = []
     for t in foils:
@@ -70,19 +74,21 @@ def foil_step_errors(scene, mats, mat_names, material, radius, surfaces, dt) -> 
 
 
 def heat_step_errors(scene, material, radius, heat_cap, max_neighbors, surfaces, dt,
-                     contacts: bool) -> tuple[float | None, list[str]]:
+                     contacts: bool, grain_scale=1.0) -> tuple[float | None, list[str]]:
     """The conduction limit of the particle temperature update (None without contacts) and the
     refusals of a scene with [heat]: a gas lens with no smallest gap, a step above the
-    conduction limit, a heated foil whose explicit update the step would make unstable."""
+    conduction limit, a heated foil whose explicit update the step would make unstable.
+    `grain_scale`: k of each particle (parcels of k^3 grains conduct as those grains)."""
     mats = scene.materials
     mat_names = list(mats)
     if scene.heat.fluid_layer > 0 and scene.heat.gas_mean_free_path + scene.heat.roughness <= 0:
         return None, ["heat.roughness: gas conduction between neighbours needs a smallest gap "
                       "gas_mean_free_path + roughness > 0 (got 0); set roughness (e.g. 1e-6) or fluid_layer = 0"]
-    limit = thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors, surfaces) if contacts else None
+    limit = (thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors, surfaces, grain_scale)
+             if contacts else None)
     if contacts and dt > limit:
         return limit, [
             f"heat: the time step {dt:.3g} s exceeds the explicit conduction limit {limit:.3g} s "
             "(min over particles of m c / sum of contact conductances); raise materials.*.heat_capacity, "
             "lower materials.*.conductivity, or lower the time step"]
-    return limit, foil_step_errors(scene, mats, mat_names, material, radius, surfaces, dt)
+    return limit, foil_step_errors(scene, mats, mat_names, material, radius, surfaces, dt, grain_scale)

@@ -23,7 +23,7 @@ from pathlib import Path
 from tidem.features import scene_features
 from tidem.gas_geometry import gas_grid
 from tidem.scene.averaging_layout import cell_grid
-from tidem.scene.sizes import largest_parcel, max_diameter
+from tidem.scene.sizes import largest_parcel, max_diameter, parcel_count
 
 RUNTIME_BYTES = 172 * 2**20  # peak RSS of a run less fields and host arrays (measured, float64 bed of 20k)
 HOST_BYTES_PER_PARTICLE = 1050  # numpy arrays of the scene and of the read-backs (measured, 20k vs 126k)
@@ -171,7 +171,7 @@ def scene_items(scene) -> list[Item]:
             items.append(Item(f"the {format_count(sites)} lattice sites of the fill of {key}.region "
                               f"(diameter {d:g} m)", sites * LATTICE_BYTES_PER_SITE, f"{key}.diameter",
                               "use larger particles or a smaller region"))
-        n = len(g.positions) if g.positions is not None else g.count if g.count is not None else sites
+        n = parcel_count(g) or sites
         counts.append((float(n), f"{key}.count" if g.count is not None else f"{key}.region", key))
     fill = {k: f"use fewer particles (the most are in {k}: a smaller region, larger particles or a 'count')"
             for _, r, k in counts if r.endswith(".region")}

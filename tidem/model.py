@@ -72,6 +72,13 @@ class Model:
     def scene(self):
         return self.loaded.scene
 
+    @property
+    def grain_scale(self) -> float:
+        """k of a scene whose particles are all parcels of one size ratio (scene.checks refuses
+        mixed k with heat, the only place a scene-wide k is needed); 1 otherwise."""
+        ks = np.unique(self.coarse_grain)
+        return float(ks[0]) if len(ks) == 1 else 1.0
+
     def memory_bytes(self) -> int:
         """Expected memory of the Taichi fields [bytes] (see `tidem.state.State`)."""
         return field_bytes(self)
@@ -147,7 +154,8 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     if scene.heat is not None:
         c = np.array([mats[m].heat_capacity or 0.0 for m in mat_names])[material]
         heat_cap = mass * c
-        thermal_limit, errors = heat_step_errors(scene, material, radius, heat_cap, k, planes + tubes, dt, contacts)
+        thermal_limit, errors = heat_step_errors(scene, material, radius, heat_cap, k, planes + tubes, dt, contacts,
+                                                   grain_scale)
         if errors:
             raise SceneError(src, errors)
     if scene.gas is not None:
@@ -158,7 +166,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     if scene.reactions:
         rx = reaction_index(scene, placed.group)
         rconst = reaction_constants(scene)
-        errors = reaction_step_checks(scene, dt, radius, density, rx)
+        errors = reaction_step_checks(scene, dt, radius / grain_scale, density, rx)
         if errors:
             raise SceneError(src, errors)
     end = t_end if t_end is not None else num.t_end

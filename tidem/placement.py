@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tidem.scene.sizes import largest_parcel
+from tidem.scene.sizes import largest_parcel, parcel_count
 
 
 class PlacementError(ValueError):
@@ -115,12 +115,7 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
     for gi, g in enumerate(scene.particles):
         rng = np.random.default_rng(g.seed)
         key = f"particles[{gi}]"
-        if g.positions is not None:
-            count = len(g.positions)
-        elif g.count is not None:
-            count = g.count
-        else:
-            count = None  # fill every free lattice site of the region
+        count = parcel_count(g)  # None: fill every free lattice site of the region
         if g.region is not None:
             spacing = 1.02 * largest_parcel(g)
             sites = lattice_sites(g.region.min, g.region.max, spacing, g.lattice)
@@ -130,9 +125,10 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
             if count is None:
                 count = len(sites)
             if len(sites) == 0 or len(sites) < count:
+                asked = f"{count}" if g.coarse_grain == 1.0 else f"{count} parcels ({g.count} grains / k^3)"
                 errors.append(
                     f"{key}: the region holds at most {len(sites)} particles of diameter {spacing / 1.02:g} m clear of "
-                    f"walls and tubes, but {count} were asked for; enlarge 'region' or lower 'count'"
+                    f"walls and tubes, but {asked} were asked for; enlarge 'region' or lower 'count'"
                 )
                 continue
         try:
@@ -156,7 +152,8 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
             pos = np.zeros((count, 3))
             vel = np.tile(g.velocity, (count, 1))
             act = np.zeros(count, bool)
-            pours.append(dict(first=offset, count=count, region=g.pour.region, rate=g.pour.rate, start=g.pour.start,
+            pours.append(dict(first=offset, count=count, region=g.pour.region, rate=g.pour.rate / g.coarse_grain**3,
+                              start=g.pour.start,
                               seed=g.seed, inserted=0, key=key))
         radius.append(0.5 * d)
         material.append(np.full(count, mat_names.index(g.material), np.int32))

@@ -125,7 +125,7 @@ def reaction_observables(model, solver) -> dict:
         live = mine & active
         row: dict = {"type": r.type, "particles": int(mine.sum()), "present": int(live.sum())}
         if r.type == "char_combustion":
-            row.update(carbon_burnt_kg=float(sums[REACTED]), burnt_out=int(sums[GONE]))
+            row.update(carbon_burnt_kg=float(sums[REACTED]), burnt_out=round(sums[GONE]))
             if live.any():
                 row.update(T_mean_K=float(T[live].mean()), T_max_K=float(T[live].max()),
                            gas_T_at_char_K=float(S.gT.to_numpy()[live].mean()),
@@ -153,6 +153,6 @@ def reaction_observables(model, solver) -> dict:
                 row.update(sublimation_time_mean_s=float(times.mean()), sublimation_time_median_s=float(np.median(times)),
                            sublimation_time_p90_s=float(np.percentile(times, 90)),
                            sublimation_time_max_s=float(times.max()))
-            row["escaped_count_total"] = int(sums[ESCAPED])
+            row["escaped_count_total"] = round(sums[ESCAPED])
         out[r.group] = row
     return out

@@ -34,7 +34,8 @@ def reaction_constants(scene) -> list[dict]:
     out = []
     groups = [g.name for g in scene.particles]
     for r in scene.reactions:
-        c = dict(kind=KIND_IDS[r.type], group=groups.index(r.group))
+        group = groups.index(r.group)
+        c = dict(kind=KIND_IDS[r.type], group=group, cg=scene.particles[group].coarse_grain)
         if r.type == "char_combustion":
             ox = scene.gas.oxygen
             phi = r.co_fraction
@@ -124,7 +125,7 @@ def reaction_summary(solver) -> dict:
     """Time-series columns: totals of the reaction accumulators and the O2 left in the gas."""
     s = solver.state.rsum.to_numpy()
     out = dict(reacted_mass_kg=float(s[REACTED]), reaction_heat_J=float(s[HEAT_RELEASED]),
-               latent_heat_J=float(s[LATENT]), particles_gone=int(s[GONE]), particles_escaped=int(s[ESCAPED]))
+               latent_heat_J=float(s[LATENT]), particles_gone=round(s[GONE]), particles_escaped=round(s[ESCAPED]))
     if solver.model.features.species:
         out["o2_used_kg"] = float(s[O2_USED])
         out["gas_o2_mean_mole_fraction"] = solver.gas.mean_o2_mole_fraction()

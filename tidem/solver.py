@@ -91,7 +91,7 @@ class Solver:
                                    model.wall_slots, model.gravity, S, f.contact_time,
                                    model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
-                                   model.skin + model.heat_reach)
+                                   model.skin + model.heat_reach, model.grain_scale)
         self._mark_near = forces.mark_near
         return forces
 

@@ -40,31 +40,16 @@ def heat_checks(scene: Scene) -> list[str]:
 
 
 def coarse_grain_checks(scene: Scene) -> list[str]:
-    """Coarse-grained groups (a parcel of k d for k^3 grains) only with the models whose parcel
-    scaling tidem has: contacts (unchanged laws keep restitution and relative overlap), drag,
-    pressure-gradient force and gas-particle heat (per grain, times k^3), contact-spot
-    conduction (the spot grows by k, which keeps the bed's conductivity). Refused where the
-    scaling is not implemented (docs/design/coarse_graining.md)."""
-    coarse = [(f"particles[{i}].coarse_grain", g) for i, g in enumerate(scene.particles) if g.coarse_grain != 1.0]
-    if not coarse:
+    """Coarse-grained groups (a parcel of k d for k^3 grains; docs/design/coarse_graining.md):
+    every model tidem has is scaled per grain, but conduction between parcels of different k
+    has no consistent law (a pair's spot and lens scale with one k), so a scene with [heat]
+    needs one k for all its groups."""
+    ks = {g.coarse_grain for g in scene.particles}
+    if scene.heat is None or len(ks) == 1:
         return []
-    errs: list[str] = []
-    heat = scene.heat
-    hot = [k for k, v in [("domain.wall_temperature", scene.domain.wall_temperature)]
-           + [(f"walls[{i}]", w.temperature or w.heat_flux) for i, w in enumerate(scene.walls)]
-           + [(f"tubes[{i}]", t.temperature or t.heat_flux) for i, t in enumerate(scene.tubes)] if v is not None]
-    reacting = {r.group for r in scene.reactions}
-    for key, g in coarse:
-        if heat is not None and hot:
-            errs.append(f"{key}: heat from walls and tubes ({', '.join(hot)}) to parcels is not scaled yet (a parcel "
-                        "would need k^2 grains' wall conductances); use coarse_grain = 1 or no surface temperatures")
-        if heat is not None and heat.fluid_layer > 0.0:
-            errs.append(f"{key}: the gas-lens conduction between parcels is not scaled yet; use coarse_grain = 1 or "
-                        "heat.fluid_layer = 0")
-        if g.name in reacting:
-            errs.append(f"{key}: reactions of coarse-grained parcels are not scaled yet; use coarse_grain = 1 for "
-                        f"group '{g.name}'")
-    return errs
+    listed = ", ".join(f"particles[{i}].coarse_grain = {g.coarse_grain:g}" for i, g in enumerate(scene.particles))
+    return [f"particles[*].coarse_grain: with [heat] every group needs the same coarse_grain ({listed}); conduction "
+            "between parcels of different size ratios has no consistent scaling; give all groups one value"]
 
 
 def radiation_checks(scene: Scene) -> list[str]:

@@ -23,8 +23,20 @@ def largest_parcel(group) -> float:
     return group.coarse_grain * largest_diameter(group.diameter)
 
 
+def parcel_count(group) -> int | None:
+    """Simulated particles of a group: its positions, or `count` grains in parcels of k^3
+    grains (at least one), or None for a region filled to the brim."""
+    if group.positions is not None:
+        return len(group.positions)
+    if group.count is None:
+        return None
+    return max(1, round(group.count / group.coarse_grain**3))
+
+
 def max_diameter(scene: Scene) -> float:
     """Largest particle diameter the scene can simulate [m] (parcels at their coarse-grained
-    size), growing particles at their cap."""
-    grown = [r.max_diameter for r in scene.reactions if r.type == "polymerization" and r.growth]
+    size), growing particles at their cap (k times the grains' cap for parcels)."""
+    groups = {g.name: g for g in scene.particles}
+    grown = [(groups[r.group].coarse_grain if r.group in groups else 1.0) * r.max_diameter for r in scene.reactions
+             if r.type == "polymerization" and r.growth]
     return max([largest_parcel(g) for g in scene.particles] + grown)
