@@ -249,6 +249,8 @@ def check(
 ):
     """Validate a scene and print its derived numbers (particles, time steps, kernels, memory); a scene with
     errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
+    import numpy as np
+
     from tidem.memory import format_bytes
 
     loaded = load_scene(path, set_)
@@ -260,6 +262,8 @@ def check(
         f"scene: {model.name} ({loaded.source})",
         f"particles: {int(model.active0.sum())} at start, {model.capacity} in all, total mass {mass:.4g} kg",
         f"diameter: {2 * model.radius.min():.4g} .. {2 * model.radius.max():.4g} m",
+        *([f"coarse graining: parcels of k^3 grains, k = {', '.join(f'{k:g}' for k in np.unique(model.coarse_grain))}; "
+           f"{float((model.coarse_grain**3).sum()):.0f} grains"] if f.coarse_grain else []),
         f"contact law: {loaded.scene.contact.model}; rolling resistance: {'on' if f.rolling else 'off'}",
         f"Rayleigh time {sc.rayleigh:.4g} s, contact time {sc.contact:.4g} s, stability limit {sc.limit:.4g} s"
         + (" (does not bind: every particle is fixed)" if model.fixed.all() else ""),

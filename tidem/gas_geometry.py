@@ -26,34 +26,40 @@ def gas_grid(scene) -> GasGrid:
     return GasGrid(lo=tuple(dom.min), cells=tuple(cells), h=tuple(h), periodic=periodic)
 
 
-def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
-    """1 for cells whose centre lies inside a tube (wall for the gas)."""
+def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:
+    """The cells a tube fills for the gas: those whose centre lies inside it, or, for a tube
+    too thin to hold a cell centre, the row of cells that holds its axis (so every tube blocks
+    the gas and exchanges heat with it)."""
     idx = np.indices(gg.cells).reshape(3, -1).T
     centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
-    solid = np.zeros(len(idx), np.int32)
+    d = (centres - np.asarray(tube["c"])) * np.asarray(tube["mask"])
+    dist2 = np.einsum("ij,ij->i", d, d)
+    inside = dist2 < tube["r"] ** 2
+    if not inside.any():
+        inside = dist2 <= dist2.min() * (1 + 1e-9)  # the nearest row: one cell across, or 2-4 on a cell edge
+    return inside.reshape(gg.cells)
+
+
+def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
+    """1 for the cells a tube fills (`tube_cells`: wall for the gas)."""
+    solid = np.zeros(gg.cells, np.int32)
     for t in tubes:
-        d = (centres - np.asarray(t["c"])) * np.asarray(t["mask"])
-        solid |= (np.einsum("ij,ij->i", d, d) < t["r"] ** 2).astype(np.int32)
-    return solid.reshape(gg.cells)
+        solid |= tube_cells(gg, t).astype(np.int32)
+    return solid
 
 
 def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
     """Per cell, the surface of a heated tube that the cell borders, for gas-tube convection:
     wall_A [m^2] (the faces it shares with that tube's solid cells, scaled so that each tube's
-    cells add up to pi D L), wall_T [K], wall_D [m] and wall_k (tube index); None when no
-    heated tube has solid cells."""
-    idx = np.indices(gg.cells).reshape(3, -1).T
-    centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
+    cells add up to pi D L), wall_T [K], wall_D [m] and wall_k (tube index); None without a
+    heated tube."""
     face_area = [gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]]
     area = np.zeros(gg.cells)
     out = {"wall_T": np.zeros(gg.cells), "wall_D": np.ones(gg.cells), "wall_k": np.zeros(gg.cells, np.int32)}
     for k, t in enumerate(tubes):
         if t["T"] is None:
             continue
-        d = (centres - np.asarray(t["c"])) * np.asarray(t["mask"])
-        inside = (np.einsum("ij,ij->i", d, d) < t["r"] ** 2).reshape(gg.cells)
-        if not inside.any():
-            continue
+        inside = tube_cells(gg, t)
         borders = np.zeros(gg.cells)
         for a in range(3):
             for shift in (1, -1):
