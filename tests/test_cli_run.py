@@ -107,7 +107,7 @@ def test_check_prints_derived_numbers():
 @pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml", "moving_bed_ta1.toml",
                                   "moving_bed_ta2.toml", "fluidized_tube.toml", "char_combustion.toml",
                                   "olefin_polymerization.toml", "plasma_sublimation.toml", "packed_bed_preheat.toml",
-                                  "moving_bed_foil.toml"])
+                                  "moving_bed_foil.toml", "lab_fluidized_bundle.toml"])
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name

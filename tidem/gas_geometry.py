@@ -28,15 +28,19 @@ def gas_grid(scene) -> GasGrid:
 
 def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:
     """The cells a tube fills for the gas: those whose centre lies inside it, or, for a tube
-    too thin to hold a cell centre, the row of cells that holds its axis (so every tube blocks
-    the gas and exchanges heat with it)."""
+    too thin to hold a cell centre, the one row of cells along its axis nearest to it (the
+    first of equals on a cell edge or corner), so that every tube blocks the gas and exchanges
+    heat with it. Tubes centred on cell centres are represented best."""
     idx = np.indices(gg.cells).reshape(3, -1).T
     centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
-    d = (centres - np.asarray(tube["c"])) * np.asarray(tube["mask"])
+    mask = np.asarray(tube["mask"])
+    d = (centres - np.asarray(tube["c"])) * mask
     dist2 = np.einsum("ij,ij->i", d, d)
     inside = dist2 < tube["r"] ** 2
     if not inside.any():
-        inside = dist2 <= dist2.min() * (1 + 1e-9)  # the nearest row: one cell across, or 2-4 on a cell edge
+        across = mask > 0  # the two axes across the tube
+        nearest = idx[np.argmin(dist2)]
+        inside = (idx[:, across] == nearest[across]).all(axis=1)
     return inside.reshape(gg.cells)
 
 

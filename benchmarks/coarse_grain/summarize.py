@@ -1,6 +1,6 @@
 """Seed-spread table and Pareto plot of a coarse-graining tradeoff (docs/coarse_graining.md).
 
-    python benchmarks/coarse_grain/summarize.py RUN_DIR/tradeoff.csv [OUT_STEM]
+    python benchmarks/coarse_grain/summarize.py RUN_DIR/tradeoff.csv [OUT_STEM [BED_MASS_KG]]
 
 Reads the tradeoff.csv of `tidem tradeoff ... --vary 'particles[0].coarse_grain=...' --vary
 'particles[0].seed=...'`, groups the variants by k, and writes OUT_STEM.md (per k and
@@ -25,7 +25,7 @@ import numpy as np
 SHOWN = {"pressure_drop_Pa": "pressure drop [Pa]", "bed_height_m": "bed height (end) [m]",
          "kinetic_energy_J": "kinetic energy (end) [J]", "mean_temperature_K": "mean T (end) [K]",
          "mean_kinetic_energy_J": "kinetic energy (mean) [J]", "mean_centre_of_mass_m": "centre of mass (mean) [m]"}
-MASS_G = 0.03665 * 9.81  # bed weight of bubbling_tube_slab.toml [N] (28 000 grains)
+BED_MASS = 0.03665  # [kg], bubbling_tube_slab.toml (28 000 grains; `tidem check` prints it)
 
 
 def label(key: str) -> str:
@@ -35,7 +35,7 @@ def label(key: str) -> str:
     return f"tube {m.group(2)} {m.group(3).replace('_', ' ')}" if m else key
 
 
-def late_means(run_dir: Path) -> dict[str, str]:
+def late_means(run_dir: Path, bed_mass: float) -> dict[str, str]:
     """Time means over the second half of a variant's timeseries.csv: the kinetic energy and
     the bed's centre-of-mass height (potential energy / (M g); unbiased by the parcel size,
     unlike a percentile of the centres)."""
@@ -44,10 +44,10 @@ def late_means(run_dir: Path) -> dict[str, str]:
     late = [r for r in rows if float(r["time_s"]) >= 0.5 * t_end]
     ke = np.mean([float(r["kinetic_energy_J"]) for r in late])
     pe = np.mean([float(r["potential_energy_J"]) for r in late])
-    return {"mean_kinetic_energy_J": str(ke), "mean_centre_of_mass_m": str(pe / (MASS_G))}
+    return {"mean_kinetic_energy_J": str(ke), "mean_centre_of_mass_m": str(pe / (bed_mass * 9.81))}
 
 
-def load(path: Path):
+def load(path: Path, bed_mass: float):
     rows = list(csv.DictReader(open(path)))
     keys = [k for k in rows[0] if not k.startswith("error_") and k not in
             ("variant", "overrides", "status", "wall_s", "particle_steps_per_s", "dt_s")]
@@ -56,14 +56,14 @@ def load(path: Path):
     for r in rows:
         if r["status"] != "finished":
             continue
-        r.update(late_means(path.parent / f"variant_{int(r['variant']):02d}"))
+        r.update(late_means(path.parent / f"variant_{int(r['variant']):02d}", bed_mass))
         k = float(re.search(r"coarse_grain=([0-9.]+)", r["overrides"]).group(1))
         by_k[k].append(r)
     return keys, dict(sorted(by_k.items()))
 
 
-def summarize(csv_path: Path, stem: Path) -> None:
-    keys, by_k = load(csv_path)
+def summarize(csv_path: Path, stem: Path, bed_mass: float = BED_MASS) -> None:
+    keys, by_k = load(csv_path, bed_mass)
     base = {key: np.array([float(r[key]) for r in by_k[1.0]]) for key in keys}
     wall = {k: np.mean([float(r["wall_s"]) for r in rs]) for k, rs in by_k.items()}
     rate = {k: np.mean([float(r["particle_steps_per_s"]) for r in rs]) for k, rs in by_k.items()}
@@ -83,7 +83,7 @@ def summarize(csv_path: Path, stem: Path) -> None:
                                       "within 5 %" if abs(dev) <= 0.05 else f"off {100 * dev:+.0f} %"))
         lines.append(f"| {k:g} | {len(rs)} | {wall[k]:.0f} | {wall[1.0] / wall[k]:.1f}x | " + " | ".join(cells) + " |")
     lines += ["", "Cells: mean over the seeds [min, max] (deviation of the mean from k = 1's mean). "
-              f"Particle-steps/s per variant: " + ", ".join(f"k = {k:g}: {rate[k]:.3g}" for k in by_k) + ".", "",
+              "Particle-steps/s per variant: " + ", ".join(f"k = {k:g}: {rate[k]:.3g}" for k in by_k) + ".", "",
               "| observable | " + " | ".join(f"k = {k:g}" for k in by_k if k != 1.0) + " |",
               "|---|" + "---|" * (len(by_k) - 1)]
     lines += [f"| {label(key)} | " + " | ".join(v for _, v in verdicts[key]) + " |" for key in keys]
@@ -124,4 +124,5 @@ def plot(keys, by_k, base, wall, path: Path) -> None:
 
 if __name__ == "__main__":
     src = Path(sys.argv[1])
-    summarize(src, Path(sys.argv[2]) if len(sys.argv) > 2 else src.with_name("coarse_grain_summary"))
+    summarize(src, Path(sys.argv[2]) if len(sys.argv) > 2 else src.with_name("coarse_grain_summary"),
+              float(sys.argv[3]) if len(sys.argv) > 3 else BED_MASS)

@@ -263,17 +263,17 @@ def test_tube_heats_still_gas_by_churchill_bernstein_and_the_gas_keeps_it(solver
     assert not s2.gas.walls
 
 
-@pytest.mark.parametrize("centre, cells", [((0.025, 0.045), 1), ((0.05, 0.04), 4), ((0.05, 0.045), 2)])
-def test_a_tube_thinner_than_a_gas_cell_still_fills_one(centre, cells):
-    """A 6 mm tube on 10 mm cells holds no cell centre: it fills the cells nearest its axis
-    (one, or the two or four sharing an edge or corner) and keeps its whole surface pi D L for
-    the gas convection."""
+@pytest.mark.parametrize("centre", [(0.025, 0.045), (0.05, 0.04), (0.05, 0.045), (0.052, 0.043)])
+def test_a_tube_thinner_than_a_gas_cell_still_fills_one(centre):
+    """A 6 mm tube on 10 mm cells holds no cell centre: it fills the one row of cells nearest
+    its axis (on a cell edge or corner too) and keeps its whole surface pi D L for the gas
+    convection."""
     from tidem.gas_geometry import solid_cells, tube_walls
     from tidem.kernels.gas_grid import GasGrid
 
     gg = GasGrid(lo=(0.0, 0.0, 0.0), cells=(10, 2, 10), h=(0.01, 0.01, 0.01), periodic=(False, True, False))
     tube = {"c": [centre[0], 0.0, centre[1]], "mask": [1.0, 0.0, 1.0], "r": 0.003, "T": 350.0}
-    assert solid_cells(gg, [tube]).sum() == cells * 2
+    assert solid_cells(gg, [tube]).sum() == 2  # one cell across, two along the tube
     walls = tube_walls(gg, [tube])
     assert walls["wall_A"].sum() == pytest.approx(math.pi * 0.006 * 0.02, rel=1e-12)
 
