@@ -65,6 +65,7 @@ class Features:
             *[(True, f"reaction: {kind.replace('_', ' ')}") for kind in dict.fromkeys(self.reactions)],
             (self.growth, "particle growth (neighbour list rebuilt on growth + motion)"),
             (self.averaging, "local averaging (cells" + (", tube ring sectors)" if self.n_tubes else ")")),
+            (self.coarse_grain, "coarse graining (parcels of k^3 grains, per-grain scaling)"),
         ]
         return out + [text for wanted, text in optional if wanted]
 
