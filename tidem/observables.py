@@ -317,7 +317,8 @@ def packet_model_rows(model, tube_means: list[dict]) -> list[dict]:
     for row in tube_means:
         tube = model.scene.tubes[row["tube"]]
         ref = packet_alpha(tube_diameter=tube.diameter, speed=outlet.speed,
-                           particle_diameter=float(2.0 * model.radius[first].mean()), solid_density=mat.density,
+                           particle_diameter=float(2.0 * (model.radius[first] / model.coarse_grain[first]).mean()),
+                           solid_density=mat.density,
                            solid_conductivity=mat.conductivity, heat_capacity=mat.heat_capacity,
                            gas_conductivity=heat.gas_conductivity, gap=heat.gas_mean_free_path + heat.roughness)
         rows.append({"tube": row["tube"], **ref.as_dict(), "simulated_mean_alpha_W_m2K": row["mean_alpha_W_m2K"],
