@@ -178,6 +178,8 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
         "message": message,
         "active_models": f.kernels(),
         "particles": n,
+        **({"grains_at_start": round(float((model.coarse_grain[model.active0] ** 3).sum())),
+            "coarse_grain": sorted({float(k) for k in model.coarse_grain})} if f.coarse_grain else {}),
         "capacity": model.capacity,
         "steps": steps,
         "t_end_s": model.t_end,
