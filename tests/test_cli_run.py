@@ -122,6 +122,8 @@ def test_shipped_scene_smoke(tmp_path, name):
         grid, fields = read_vti(vti[-1])
         eps = fields["voidage"][fields["solid"] == 0]
         assert grid["time"] > 0 and ((eps > 0) & (eps <= 1)).all()
+    if name == "lab_fluidized_bundle.toml":  # 700 000 grains as parcels of 27
+        assert run["particles"] == 25926 and run["grains_at_start"] == 700002 and run["coarse_grain"] == [3.0]
     if name == "moving_bed_foil.toml":  # the heated foil warms from the bed's temperature
         foil = read_series(out / "timeseries.csv")["tubes1_foil_T_K"]
         assert foil[0] == pytest.approx(293.15) and foil[-1] > foil[0] + 0.01
