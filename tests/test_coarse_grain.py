@@ -208,3 +208,29 @@ def test_count_counts_grains_so_the_bed_mass_stays(k, parcels):
     assert len(model.radius) == parcels
     grain_mass = 2500.0 * math.pi * 1e-9 / 6
     assert model.mass.sum() == pytest.approx(800 * grain_mass, rel=0.5 * k**3 / 800)
+
+
+def test_passages_under_four_parcels_are_named_with_the_k_that_fits():
+    """Advice, not an error: the narrowest passage under 4 parcels, with the largest k that fits it."""
+    from tidem.scene.load import load
+    from tidem.scene.passages import narrow_passages
+
+    assert narrow_passages(load("lab_fluidized_bundle").scene) == []  # k = 3: tube gaps of 12.2 mm hold 4.1 parcels
+    notes = narrow_passages(load("lab_fluidized_bundle", ["particles[0].coarse_grain=4"]).scene)
+    assert len(notes) == 1
+    assert "particles[0].coarse_grain = 4: the gap between tubes[1] and tubes[2] is 12.2 mm, 3.1 parcels" in notes[0]
+    assert "(and 6 more passages under 4 parcels)" in notes[0] and "use coarse_grain <= 3 or" in notes[0]
+    assert narrow_passages(load("lab_fluidized_bundle", ["particles[0].coarse_grain=1"]).scene) == []
+
+
+def test_a_periodic_slab_a_few_parcels_deep_is_named():
+    from tidem.scene.load import validate
+    from tidem.scene.passages import narrow_passages
+
+    raw = heated_bed(coarse_grain=2.0)
+    raw["domain"]["max"] = [0.02, 0.007, 0.05]
+    raw["domain"]["periodic"] = ["y"]
+    raw["particles"][0]["region"] = {"min": [0, 0, 0], "max": [0.02, 0.007, 0.01]}
+    notes = narrow_passages(validate(raw).scene)
+    assert len(notes) == 1 and "the domain's y extent is 7 mm, 3.5 parcels of 2 mm" in notes[0]
+    assert "use coarse_grain <= 1.7 or" in notes[0]

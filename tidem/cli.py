@@ -65,6 +65,7 @@ def scene(
     out_dir = resume or out or Path("renders") / model.name
     writable(out_dir, "--resume" if resume is not None else "--out")
     checkpoint = _checkpoint(resume, loaded, model) if resume is not None else None
+    _passage_notes(loaded.scene, "tidem: note: ")
     typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
                f"{f' (+{model.capacity - int(model.active0.sum())} to pour)' if model.pours else ''}, "
                f"dt = {model.dt:.3g} s, t_end = {model.t_end:.4g} s -> {out_dir}", err=True)
@@ -275,6 +276,15 @@ def check(
         f"expected peak of a run {format_bytes(model.peak_memory_bytes())}",
     ]
     typer.echo("\n".join(lines))
+    _passage_notes(loaded.scene, "note: ", err=False)
+
+
+def _passage_notes(scene, prefix: str, err: bool = True) -> None:
+    """Advice on passages too narrow for the scene's coarse-grained parcels (`tidem.scene.passages`)."""
+    from tidem.scene.passages import narrow_passages
+
+    for note in narrow_passages(scene):
+        typer.echo(prefix + note, err=err)
 
 
 @app.command()
