@@ -8,8 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from tidem.cli import app
-from tidem.io.vtp import read_vti
-from tidem.io.vtp import read_vtp
+from tidem.io.vtp import read_vti, read_vtp
 from tidem.render.plots import read_series
 
 runner = CliRunner()
@@ -124,6 +123,8 @@ def test_shipped_scene_smoke(tmp_path, name):
         assert grid["time"] > 0 and ((eps > 0) & (eps <= 1)).all()
     if name == "lab_fluidized_bundle.toml":  # 700 000 grains as parcels of 27
         assert run["particles"] == 25926 and run["grains_at_start"] == 700002 and run["coarse_grain"] == [3.0]
+        _, arrays = read_vtp(sorted((out / "snapshots").glob("*.vtp"))[-1])
+        assert (arrays["grains"] == 27.0).all() and len(arrays["grains"]) == 25926
     if name == "moving_bed_foil.toml":  # the heated foil warms from the bed's temperature
         foil = read_series(out / "timeseries.csv")["tubes1_foil_T_K"]
         assert foil[0] == pytest.approx(293.15) and foil[-1] > foil[0] + 0.01

@@ -88,6 +88,8 @@ class Output:
         ident = S.ident.to_numpy()[idx]  # index in the scene (storage is re-sorted as the bed flows)
         name = f"snap_{len(self.entries):05d}.vtp"
         extra = {"temperature": S.T.to_numpy()[idx]} if self.model.features.heat else {}
+        if self.model.features.coarse_grain:
+            extra["grains"] = self.model.coarse_grain[ident] ** 3  # grains a parcel stands for (k^3)
         write_vtp(self.snap_dir / name, S.x.to_numpy()[idx], {**extra,
             "radius": S.radius.to_numpy()[idx],
             "velocity": S.v.to_numpy()[idx],
