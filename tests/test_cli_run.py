@@ -147,3 +147,19 @@ def test_every_shipped_scene_has_a_gallery_frame_in_the_readme():
     for name in shipped_scenes():
         frame = f"renders/gallery/{name.removesuffix('.toml')}.png"
         assert (root / frame).is_file() and frame in readme, frame
+
+
+def test_a_run_that_cannot_fit_on_disk_is_refused_before_it_starts(tmp_path, monkeypatch):
+    """`tidem scene` estimates its output (tidem.output_size) against the folder's free space."""
+    import shutil
+    from types import SimpleNamespace
+
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: SimpleNamespace(free=10**6))
+    out = tmp_path / "full"
+    result = runner.invoke(app, ["scene", "sphere_impact.toml", "--out", str(out), "--quiet", "--no-render",
+                                 "--set", "output.snapshots=20000"])
+    assert result.exit_code == 2, result.output
+    assert "output.snapshots: the run would write about" in result.output and "has 977 KiB free" in result.output
+    assert not (out / "run.json").exists()
+    result = runner.invoke(app, ["check", "sphere_impact.toml", "--set", "output.snapshots=20000"])
+    assert result.exit_code == 0 and "output: 1122 snapshots, about" in result.output  # one per step at most

@@ -64,6 +64,8 @@ def scene(
         fail(f"--out {out} and --resume {resume}: a resumed run writes into the folder it resumes; drop --out", 2)
     out_dir = resume or out or Path("renders") / model.name
     writable(out_dir, "--resume" if resume is not None else "--out")
+    if resume is None:
+        _fits_on_disk(loaded, model, out_dir, frames=not no_render)
     checkpoint = _checkpoint(resume, loaded, model) if resume is not None else None
     _passage_notes(loaded.scene, "tidem: note: ")
     typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
@@ -83,6 +85,22 @@ def scene(
         fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
     if result.status == "interrupted":
         fail(result.message + f"; finished output is in {out_dir}", 130)
+
+
+def _fits_on_disk(loaded, model, out_dir: Path, frames: bool) -> None:
+    """Exit 2 when the output folder's disk cannot hold what the run will write (`tidem.output_size`)."""
+    import shutil
+
+    from tidem.memory import format_bytes
+    from tidem.output_size import output_bytes
+
+    n, need = output_bytes(model, frames)
+    free = shutil.disk_usage(out_dir).free
+    if need > free:
+        key = "output.interval" if loaded.scene.output.interval else "output.snapshots"
+        fail(f"{loaded.source}: {key}: the run would write about {format_bytes(need)} ({n} snapshots"
+             f"{' and frames' if frames else ''}), but {out_dir} has {format_bytes(free)} free; write fewer snapshots "
+             f"(a smaller output.snapshots or a longer output.interval) or choose another folder with --out", 2)
 
 
 def _checkpoint(run_dir: Path, loaded, model):
@@ -253,11 +271,14 @@ def check(
     import numpy as np
 
     from tidem.memory import format_bytes
+    from tidem.output_size import output_bytes
 
     loaded = load_scene(path, set_)
     model = build_or_exit(loaded)
     f = model.features
     mass = float(model.mass.sum())
+    snapshots, with_frames = output_bytes(model, frames=True)
+    without = output_bytes(model, frames=False)[1]
     sc = model.scales
     lines = [
         f"scene: {model.name} ({loaded.source})",
@@ -274,6 +295,8 @@ def check(
         f"kernels: {', '.join(f.kernels())}",
         f"memory (fields): {format_bytes(model.memory_bytes())}, {model.memory_bytes() / model.capacity:.0f} B/particle; "
         f"expected peak of a run {format_bytes(model.peak_memory_bytes())}",
+        f"output: {snapshots} snapshots, about {format_bytes(with_frames)} on disk with frames "
+        f"({format_bytes(without)} with --no-render)",
     ]
     typer.echo("\n".join(lines))
     _passage_notes(loaded.scene, "note: ", err=False)
