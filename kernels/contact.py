@@ -192,10 +192,12 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     @ti.kernel
     def own_forces(n: ti.i32, t: float, dt: float):
         if ti.static(heat):
+            ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
             for s in range(n_surf):
                 S.surf_rate[s] = 0.0
         if ti.static(angle_bins > 0):
-            for k, b in S.tube_bin_rate:
+            ti.loop_config(serialize=True)
+            for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                 S.tube_bin_rate[k, b] = 0.0
         for i in range(n):
             if S.active[i]:

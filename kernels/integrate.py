@@ -50,14 +50,18 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
 
     @ti.kernel
     def kick(n: ti.i32, t: float, dt: float):
+        # the surface loops have a few items each: serial, without a thread-pool round trip
         if ti.static(heat):
+            ti.loop_config(serialize=True)
             for s in range(n_surf):
                 S.surf_energy[s] += dt * S.surf_rate[s]
         if ti.static(angle_bins > 0):
-            for k, b in S.tube_bin_rate:
+            ti.loop_config(serialize=True)
+            for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                 S.tube_bin_energy[k, b] += dt * S.tube_bin_rate[k, b]
         if ti.static(foil):
-            for k, b in S.tube_bin_T:
+            ti.loop_config(serialize=True)
+            for k, b in ti.ndrange(*S.tube_bin_T.shape):
                 foil_k = S.tube_foil[k]
                 if foil_k[0] > 0.0:
                     t_b = S.tube_bin_T[k, b]
@@ -65,9 +69,11 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                     S.tube_bin_dT[k, b] = dt / foil_k[1] * (
                         foil_k[0] - S.tube_bin_rate[k, b] / foil_k[2] + foil_k[3] * (along - 2.0 * t_b))
                     S.tube_bin_Tsum[k, b] += dt * t_b
-            for k, b in S.tube_bin_T:
+            ti.loop_config(serialize=True)
+            for k, b in ti.ndrange(*S.tube_bin_T.shape):
                 S.tube_bin_T[k, b] += S.tube_bin_dT[k, b]
         if ti.static(wall_foil):
+            ti.loop_config(serialize=True)
             for s in range(n_planes):
                 foil_s = S.plane_foil[s]
                 if foil_s[0] > 0.0:
