@@ -127,7 +127,8 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     if errors:
         raise SceneError(src, errors)
     radius, material, fixed = placed.radius, placed.material, placed.fixed
-    grain_scale = np.array([g.coarse_grain for g in scene.particles])[placed.group]  # parcel / grain diameter
+    coarse_grain = np.array([g.coarse_grain for g in scene.particles])[placed.group]  # parcel / grain diameter
+    grain_radius = radius / coarse_grain
     density = np.array([mats[m].density for m in mat_names])[material]
     mass = density * 4.0 / 3.0 * math.pi * radius**3
     pair, surf = parameter_tables(scene, mat_names, planes + tubes)
@@ -155,18 +156,18 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         c = np.array([mats[m].heat_capacity or 0.0 for m in mat_names])[material]
         heat_cap = mass * c
         thermal_limit, errors = heat_step_errors(scene, material, radius, heat_cap, k, planes + tubes, dt, contacts,
-                                                   grain_scale)
+                                                   coarse_grain)
         if errors:
             raise SceneError(src, errors)
     if scene.gas is not None:
-        errors = gas_step_checks(scene, dt, radius, density, placed.x0 if all_fixed else None, radius / grain_scale)
+        errors = gas_step_checks(scene, dt, radius, density, placed.x0 if all_fixed else None, grain_radius)
         if errors:
             raise SceneError(src, errors)
     rx = rconst = None
     if scene.reactions:
         rx = reaction_index(scene, placed.group)
         rconst = reaction_constants(scene)
-        errors = reaction_step_checks(scene, dt, radius / grain_scale, density, rx)
+        errors = reaction_step_checks(scene, dt, grain_radius, density, rx)
         if errors:
             raise SceneError(src, errors)
     end = t_end if t_end is not None else num.t_end
@@ -183,7 +184,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
         averaging=averaging_layout(scene),
-        coarse_grain=grain_scale,
+        coarse_grain=coarse_grain,
     )
     too_big = memory_refusal(model)
     if too_big:

@@ -1,5 +1,6 @@
-"""Disk space a run will write, estimated before it starts, and the refusal when the output
-folder cannot hold it (a run that fills the disk half-way would stop without its movie).
+"""Disk space a run will write, estimated before it starts (`tidem scene` refuses a run its output
+folder cannot hold: one that fills the disk half-way would stop without its movie), and the
+output cadence the run loop writes at.
 
 Per snapshot: the particle arrays of the .vtp (positions, radius, velocity, spin, id, group,
 contacts; temperature with heat, grains when coarse-grained) for every particle the run can
@@ -22,23 +23,23 @@ FRAME_BYTES = 400 * 1024  # a temperature-coloured PNG frame (gallery frames are
 ROW_BYTES = 210  # one time-series row
 
 
-def snapshot_count(model) -> int:
-    """Snapshots a run writes: one at t = 0 and one every snapshot interval (at most every step) to t_end."""
-    out = model.scene.output
-    every = out.interval or model.t_end / out.snapshots
-    return min(int(math.floor(model.t_end / every + 1e-9)), math.ceil(model.t_end / model.dt)) + 1  # at most one a step
+def cadence(scene, t_end: float) -> tuple[float, float]:
+    """(snapshot interval, time-series interval) [s] from the scene's output table (the run loop's)."""
+    snap_dt = scene.output.interval or t_end / scene.output.snapshots
+    return snap_dt, scene.output.timeseries_interval or snap_dt / 10.0
 
 
 def output_bytes(model, frames: bool) -> tuple[int, int]:
-    """(snapshots, bytes) a run of `model` writes, with PNG frames if `frames`."""
+    """(snapshots, bytes) a run of `model` writes, with PNG frames if `frames`: a snapshot at
+    t = 0 and one every snapshot interval, at most one snapshot and one time-series row a step."""
     f = model.features
     per_particle = PARTICLE_BYTES + 8 * bool(f.heat) + 8 * bool(f.coarse_grain)
     per_snapshot = model.capacity * per_particle
     if f.gas:
         per_snapshot += math.prod(gas_grid(model.scene).cells) * GAS_BYTES_PER_CELL
     per_snapshot = per_snapshot * OVERHEAD + FRAME_BYTES * frames
-    out = model.scene.output
+    snap_dt, series_dt = cadence(model.scene, model.t_end)
     steps = math.ceil(model.t_end / model.dt)
-    rows = min(model.t_end / (out.timeseries_interval or model.t_end / out.snapshots / 10.0), steps)
-    n = snapshot_count(model)
+    n = min(math.floor(model.t_end / snap_dt + 1e-9), steps) + 1
+    rows = min(model.t_end / series_dt, steps)
     return n, int(n * per_snapshot + rows * ROW_BYTES)

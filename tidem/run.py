@@ -22,6 +22,7 @@ from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_cs
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.model import Model
+from tidem.output_size import cadence
 from tidem.phases import clock
 from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
@@ -76,7 +77,7 @@ class Output:
                           if model.features.reactions else None)
         self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
                          if model.features.packed_bed_profiles else None)
-        self.averages = (AverageRecorder(model, _cadence(model.scene, model.t_end)[1],
+        self.averages = (AverageRecorder(model, cadence(model.scene, model.t_end)[1],
                                          loop.get("averages") if loop else None)
                          if model.features.averaging else None)
 
@@ -251,12 +252,6 @@ class StopRequest:
         return False
 
 
-def _cadence(scene, t_end: float) -> tuple[float, float]:
-    """(snapshot interval, time-series interval) [s] from the scene's output table."""
-    snap_dt = scene.output.interval or t_end / scene.output.snapshots
-    return snap_dt, scene.output.timeseries_interval or snap_dt / 10.0
-
-
 def _next_after(t: float, every: float) -> float:
     return (math.floor(t / every + 1e-9) + 1) * every
 
@@ -293,7 +288,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     scene = model.scene
     t_end = model.t_end
     output_table = scene.output.model_dump()
-    snap_dt, series_dt = _cadence(scene, t_end)
+    snap_dt, series_dt = cadence(scene, t_end)
     next_snap = next_series = next_ckpt = 0.0
     wall_before = 0.0
     if loop is not None:

@@ -64,12 +64,15 @@ def narrow_passages(scene: Scene) -> list[str]:
     passages = _passages(scene)
     for g_i, group in enumerate(scene.particles):
         k = group.coarse_grain
-        parcel = k * largest_diameter(group.diameter)
+        if k <= 1.0:
+            continue
+        grain = largest_diameter(group.diameter)
+        parcel = k * grain
         narrow = sorted((width, what) for what, width in passages if 0.0 < width < MIN_PARCELS * parcel)
-        if k <= 1.0 or not narrow:
+        if not narrow:
             continue
         width, what = narrow[0]
-        k_fit = max(1.0, math.floor(10.0 * width / (MIN_PARCELS * parcel / k)) / 10.0)
+        k_fit = max(1.0, math.floor(10.0 * width / (MIN_PARCELS * grain)) / 10.0)
         more = f" (and {len(narrow) - 1} more passages under {MIN_PARCELS:g} parcels)" if len(narrow) > 1 else ""
         notes.append(f"particles[{g_i}].coarse_grain = {k:g}: {what} is {width * 1e3:.3g} mm, {width / parcel:.1f} "
                      f"parcels of {parcel * 1e3:.3g} mm{more}; in passages under {MIN_PARCELS:g} parcels, parcels pack "
