@@ -4,8 +4,12 @@ Step n -> n+1 (as in LAMMPS' fix nve/sphere):
   kick_drift:  v += dt/2 f/m,  w += dt/2 T/I,  x += dt v   (then periodic wrap)
   (forces at the new positions, with the half-step velocities in the dashpots)
   kick:        v += dt/2 f/m,  w += dt/2 T/I
-`kick_drift` also records the largest displacement since the last neighbour build in
-`max_disp[None]`; the run loop rebuilds the Verlet list when it exceeds half the skin. With
+`kick_drift` also returns the largest displacement since the last neighbour build (kept in
+`max_disp[None]`); the run loop rebuilds the Verlet list when it exceeds half the skin. When
+the host needs nothing between two steps, `kick(..., drift=1)` goes on with the next step's
+kick-drift for each particle in the same loop, which saves a kernel launch and a pass over the
+particles; the operations are those of the two kernels, in the same order, and the result is
+bit-identical (the partner pass reads no other particle's position, `kernels/contact.py`). With
 growing particles the radius gained since the build counts as displacement (a pair's gap
 closes by both moves and both growths, so max(move + growth) <= skin / 2 keeps the list valid).
 """
@@ -17,7 +21,8 @@ from .geometry import make_geometry
 
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
                      growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=()):
-    """Return (kick_drift(n, dt), kick(n, t, dt)); with heat, `kick` also advances temperatures
+    """Return (kick_drift(n, dt) -> max displacement, kick(n, t, dt, drift) -> max displacement
+    after the next step's kick-drift when drift = 1, else 0 (drift: 0 or 1)); with heat, `kick` also advances temperatures
     explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s.
     `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
     (the partner pass of the contact forces, the gas forces); `kick` calls them on each particle
@@ -34,22 +39,45 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     C_A dT/dt = q_el - Q_s / A, Q_s its heat into the bed."""
     min_image, wrap, _cc, _cid = make_geometry(grid)
 
+    fp = ti.lang.impl.current_cfg().default_fp
+    bits = ti.i64 if fp == ti.f64 else ti.i32
+
+    @ti.func
+    def opaque(u, zero):
+        """u, bit for bit, through an integer xor with a run-time zero. Under fast math the compiler
+        would merge a step's closing kick and the next step's half-kick in one loop (v + a + a ->
+        v + 2 a, or one product dt f / (2 m) shared by both and so left out of a fused
+        multiply-add), rounding otherwise; it cannot see through this, so a fused kick gives the
+        bits of two kernels."""
+        out = u
+        for c in ti.static(range(3)):
+            out[c] = ti.bit_cast(ti.bit_cast(u[c], bits) ^ ti.cast(zero, bits), fp)
+        return out
+
+    @ti.func
+    def drift_particle(i, dt, zero):
+        """The kick-drift of particle i (`zero`: 0, see opaque); returns its displacement since the
+        last neighbour build."""
+        S.v[i] = opaque(S.v[i], zero) + 0.5 * dt * opaque(S.f[i], zero) * S.inv_mass[i]
+        S.w[i] = opaque(S.w[i], zero) + 0.5 * dt * opaque(S.tq[i], zero) * S.inv_inertia[i]
+        x = wrap(S.x[i] + dt * S.v[i])
+        S.x[i] = x
+        moved = min_image(x - S.x_build[i]).norm()
+        if ti.static(growth):
+            moved += S.radius[i] - S.r_build[i]
+        return moved
+
     @ti.kernel
-    def kick_drift(n: ti.i32, dt: float):
+    def kick_drift(n: ti.i32, dt: float) -> float:
         S.max_disp[None] = 0.0
         for i in range(n):
             if S.active[i]:
-                S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]
-                S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
-                x = wrap(S.x[i] + dt * S.v[i])
-                S.x[i] = x
-                moved = min_image(x - S.x_build[i]).norm()
-                if ti.static(growth):
-                    moved += S.radius[i] - S.r_build[i]
-                ti.atomic_max(S.max_disp[None], moved)
+                ti.atomic_max(S.max_disp[None], drift_particle(i, dt, 0))
+        return S.max_disp[None]
 
     @ti.kernel
-    def kick(n: ti.i32, t: float, dt: float):
+    def kick(n: ti.i32, t: float, dt: float, drift: ti.i32) -> float:
+        S.max_disp[None] = 0.0
         # the surface loops have a few items each: serial, without a thread-pool round trip
         if ti.static(heat):
             ti.loop_config(serialize=True)
@@ -86,5 +114,8 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                 S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
                 if ti.static(heat):
                     S.T[i] += dt * S.q[i] * S.inv_heat_cap[i]
+                if drift:
+                    ti.atomic_max(S.max_disp[None], drift_particle(i, dt, drift >> 1))
+        return S.max_disp[None]
 
     return kick_drift, kick

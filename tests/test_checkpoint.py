@@ -88,18 +88,19 @@ def test_run_to_half_then_resume_is_bit_identical(uninterrupted, tmp_path):
 
 
 def test_sigterm_checkpoints_at_a_step_boundary_and_resume_is_bit_identical(uninterrupted, tmp_path, monkeypatch):
-    real_step = Solver.step
+    real_step = Solver._step
 
-    def step(self):
-        real_step(self)
+    def step(self, drift_next):
+        real_step(self, drift_next)
         if self.steps == 777:
             os.kill(os.getpid(), signal.SIGTERM)
 
-    monkeypatch.setattr(Solver, "step", step)
+    monkeypatch.setattr(Solver, "_step", step)
     stopped = run(build_model(validate(hot_pour())), tmp_path, progress=False)
-    assert stopped.status == "interrupted" and "SIGTERM" in stopped.message and stopped.steps == 777
-    monkeypatch.setattr(Solver, "step", real_step)
-    assert checkpoint.load(tmp_path)[0]["solver"]["steps"] == 777
+    # the run loop stops at the end of the steps it hands the solver at once (50 at most, tidem.run)
+    assert stopped.status == "interrupted" and "SIGTERM" in stopped.message and 777 <= stopped.steps <= 800
+    monkeypatch.setattr(Solver, "_step", real_step)
+    assert checkpoint.load(tmp_path)[0]["solver"]["steps"] == stopped.steps
     assert resume(tmp_path).status == "finished"
     assert_same_run(uninterrupted, tmp_path)
 

@@ -71,14 +71,14 @@ def test_runaway_overlap_stops_with_particle_named(tmp_path):
 def test_ctrl_c_keeps_finished_output(tmp_path, monkeypatch):
     from tidem.solver import Solver
 
-    real_step = Solver.step
+    real_step = Solver._step
 
-    def step(self):
+    def step(self, drift_next):
         if self.steps == 300:
             raise KeyboardInterrupt
-        real_step(self)
+        real_step(self, drift_next)
 
-    monkeypatch.setattr(Solver, "step", step)
+    monkeypatch.setattr(Solver, "_step", step)
     out = tmp_path / "stop"
     result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render"])
     assert result.exit_code == 130

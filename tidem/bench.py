@@ -72,6 +72,13 @@ def bench_scene(x: np.ndarray, extent, precision: str) -> dict:
     }
 
 
+def advance(solver, steps: int) -> None:
+    """Take steps in windows of 50, as the run loop does between progress updates."""
+    while steps > 0:
+        solver.advance(min(steps, 50))
+        steps -= 50
+
+
 def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None = None) -> dict:
     """Time one case in this process (called in a child process by `run_matrix`)."""
     from tidem.runtime import ensure_taichi
@@ -84,14 +91,12 @@ def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None =
     x, extent = tiled_bed(n, Path(bed) if bed else None)
     model = build_model(validate(bench_scene(x, extent, precision), "<bench>"))
     solver = Solver(model)
-    for _ in range(300):
-        solver.step()
+    advance(solver, 300)
     import taichi as ti
 
     ti.sync()
     t0 = time.perf_counter()
-    for _ in range(steps):
-        solver.step()
+    advance(solver, steps)
     ti.sync()
     wall = time.perf_counter() - t0
     rss = peak_resident_bytes()
@@ -144,13 +149,11 @@ def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dic
     if resume is not None:
         checkpoint.restore(solver, *resume)
     solver.timer.sync = ti.lang.impl.current_cfg().arch != ti.cpu
-    for _ in range(warmup):
-        solver.step()
+    advance(solver, warmup)
     ti.sync()
     solver.timer.reset()
     t0 = time.perf_counter()
-    for _ in range(steps):
-        solver.step()
+    advance(solver, steps)
     ti.sync()
     wall = time.perf_counter() - t0
     n = int(solver.state.active.to_numpy().sum())

@@ -28,6 +28,9 @@ FORMAT = 1
 # Scene keys that may change between a run and its resume: output cadence, rendering, the
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
+# What a pair's owner hands its partner within one force pass (kernels/contact.py): every force
+# pass rewrites it, so it is not kept.
+HANDOVER = ("ptq", "pstamp", "stamp")
 
 
 class CheckpointError(RuntimeError):
@@ -35,10 +38,11 @@ class CheckpointError(RuntimeError):
 
 
 def _fields(solver) -> dict[str, Field]:
-    """Every Taichi field of the solver by a stable name ('state/x', 'gas/u/2', ...)."""
+    """Every Taichi field of the solver but the force pass's handover, by a stable name
+    ('state/x', 'gas/u/2', ...)."""
     out = {}
     for name, value in sorted(vars(solver.state).items()):
-        if isinstance(value, Field):
+        if isinstance(value, Field) and name not in HANDOVER:
             out[f"state/{name}"] = value
     if solver.gas is not None:
         for name, value in sorted(vars(solver.gas.G).items()):

@@ -18,7 +18,8 @@ import taichi as ti
 # "kick-drift": the first half kick and the drift; "contact forces": the pass in which each
 # pair's lower-index particle evaluates the contact (and the walls and tubes); "kick": the
 # second half kick, which in scenes without reactions also runs the contacts' partner pass and
-# adds the gas forces (one kernel, `tidem.solver`); "gas coupling": voidage, drag and heat
+# adds the gas forces, and between outputs the next step's kick-drift (one kernel,
+# `tidem.solver`: "kick-drift" then counts only the first step after each output); "gas coupling": voidage, drag and heat
 # exchange coefficients at each gas step (and the gas forces, with reactions).
 PHASES = ("kick-drift", "neighbour build", "contact forces", "gas coupling", "gas flow", "pressure solve",
           "reactions", "inflow and outflow", "kick", "checks", "output")

@@ -325,6 +325,13 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     last_ckpt = time.perf_counter()
     in_step = False
     stop = StopRequest()
+
+    def output_due(t: float) -> bool:
+        """Whether the loop writes or shows anything at the end of a step at time t."""
+        tol = 1e-12 * t_end
+        return (view is not None or t >= next_series - tol or t >= next_snap - tol or bool(ckpt_every and t >= next_ckpt)
+                or (out.profiles is not None and out.profiles.due(t)) or (out.averages is not None and out.averages.due(t)))
+
     try:
         with bar, stop:
             while True:
@@ -348,7 +355,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                 if solver.steps >= total_steps:
                     break
                 in_step = True
-                solver.step()
+                solver.advance(solver.steps_until(output_due, 50, total_steps))
                 in_step = False
                 start = clock()
                 if solver.steps % 50 == 0 or solver.steps == total_steps:

@@ -6,7 +6,9 @@ every `numerics.sort_interval` rebuilds first a re-sort of particle storage into
 (`tidem.storage_order`), a gas step every `gas.coupling_interval` steps (scenes with gas),
 forces (contacts, then drag and pressure-gradient force), reactions (with a rebuild when a
 particle burnt out or left), kick. Without reactions the kick kernel itself finishes the
-forces (the contacts' partner pass and the gas forces), so a step is three kernel launches.
+forces (the contacts' partner pass and the gas forces), and `advance(k)`, which the run loop
+calls between outputs, has each kick go on with the next step's kick-drift: a step is then two
+kernel launches (forces, kick), bit for bit the same as k calls of `step()`.
 Each phase's wall time is booked in `timer` (`tidem.phases`, run.json's profile). Health
 checks (NaN, runaway overlap, capacity overflow) run every `numerics.check_interval` steps
 and raise `RunError` naming the particle and the fix.
@@ -58,6 +60,7 @@ class Solver:
         self.t = 0.0
         self.steps = 0
         self.rebuilds = 0
+        self._drifted = None  # within advance(): the next step's kick-drift is done, its largest displacement
         self.timer = PhaseTimer()  # seconds per phase of the step (run.json's profile)
         forces = self._build_contacts()
         self.gas = None
@@ -146,13 +149,37 @@ class Solver:
             self.gas.add_forces(self.n)
 
     def step(self) -> None:
+        """One step; the state is then at the step's end (full-step velocities)."""
+        self.advance(1)
+
+    def advance(self, steps: int) -> None:
+        """Take `steps` steps with nothing read by the host between them: the kick of each step but
+        the last goes on with the next step's kick-drift in the same kernel (`kernels/integrate.py`)."""
+        for k in range(steps):
+            self._step(drift_next=k < steps - 1)
+
+    def steps_until(self, due, every: int, last: int) -> int:
+        """The number of steps (at least one) until the first step end at time t with due(t), a
+        step count that is a multiple of `every` or of numerics.check_interval (the health check
+        then sees a finished step), or step `last` (t summed as `_step` does)."""
+        t, k = self.t, 0
+        while True:
+            k += 1
+            t += self.dt
+            n = self.steps + k
+            if due(t) or n % every == 0 or n % self._check_every == 0 or n >= last:
+                return k
+
+    def _step(self, drift_next: bool) -> None:
         dt = self.dt
         lap = self.timer.lap
         t = clock()
-        self._kick_drift(self.n, dt)
+        if self._drifted is None:
+            self._drifted = self._kick_drift(self.n, dt)
         self.t += dt
         self.steps += 1
-        need = self.state.max_disp[None] > 0.5 * self.model.skin
+        need = self._drifted > 0.5 * self.model.skin
+        self._drifted = None
         t = lap("kick-drift", t)
         if self._recycle is not None:
             need |= self._recycle(self.n) > 0
@@ -174,7 +201,9 @@ class Solver:
             if self._react(self.n, self.t, dt, left) > 0:
                 self.rebuild()  # partners of a removed particle drop it (and their history with it) at once
             t = lap("reactions", t)
-        self._kick(self.n, self.t, dt)
+        moved = self._kick(self.n, self.t, dt, int(drift_next))
+        if drift_next:
+            self._drifted = moved  # the next step's kick-drift is done: its largest displacement
         t = lap("kick", t)
         if self.steps % self._check_every == 0:
             self.check()

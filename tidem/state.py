@@ -10,12 +10,16 @@ Per-particle fields, shape [capacity]:
   x_build          position at the last neighbour build [m]
   r_build          radius at the last neighbour build [m] (only with growing particles)
   radius, mass, inv_mass [1/kg], inv_inertia [1/(kg m^2)], mat (material index), active
-  ovl              largest overlap / smaller radius over the particle's contacts
+  ovl              largest overlap / smaller radius over the contacts the particle owns (pairs
+                   with a higher-index partner, walls): the bed's largest is the largest ovl
   ncontact         number of contacts
   ident            the particle's index in the Model's arrays (storage is re-sorted into
                    cell order as the bed flows, `tidem.storage_order`)
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
+In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) the owner
+hands over ft (the force on the owner [N]), ptq (the torque on this particle [N m]) and pstamp
+(the number of the force pass, stamp[None], that wrote them: the pair touches now).
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
 [capacity, K] (heat rate into the particle from that neighbour, written by the lower-index
 particle of the pair, read by the higher one; see kernels/contact.py); per
@@ -132,6 +136,9 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     for name in ("nbr", "nbr_new", "src"):
         p.per_particle((N, K), name, ti.i32)
     p.per_particle((N, K), "ft", n=3)
+    # the pair's owner hands the partner its torque, stamped with the force pass (kernels/contact.py)
+    p.place((N, K), "ptq", n=3)
+    p.place((N, K), "pstamp", ti.i32)
     p.per_particle((N, W), "wid", ti.i32)
     p.per_particle((N, W), "wft", n=3)
     if feat.rolling:
@@ -155,7 +162,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_mask", n=3)
     p.place((NT,), "tube_r")
     p.S.max_disp = ti.field(p.fp)
-    p.fb.place(p.S.max_disp)
+    p.S.stamp = ti.field(ti.i32)
+    p.fb.place(p.S.max_disp, p.S.stamp)
 
 
 def _place_heat_fields(p: _Placer, model: Model) -> None:

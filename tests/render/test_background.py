@@ -105,16 +105,16 @@ def test_ctrl_c_during_the_run_keeps_finished_frames_and_stops_the_worker(tmp_pa
         real_call(self, snapshot)
         started.append(self.proc)
 
-    real_step = Solver.step
+    real_step = Solver._step
 
-    def step(self):
+    def step(self, drift_next):
         if self.steps == 600:
             wait_for(lambda: (out / "frames" / "frame_00001.png").exists())
             raise KeyboardInterrupt
-        real_step(self)
+        real_step(self, drift_next)
 
     monkeypatch.setattr(background.BackgroundRenderer, "__call__", call)
-    monkeypatch.setattr(Solver, "step", step)
+    monkeypatch.setattr(Solver, "_step", step)
     out = tmp_path / "stop"
     result = CliRunner().invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet"])
     assert result.exit_code == 130
