@@ -7,7 +7,8 @@ per particle and no atomic sums (so runs are bit-reproducible whatever the threa
    the force F on i and the rolling moment M on i. It hands j the rest in j's slot for i (the
    mirror slot `src[i, k]`, found at the neighbour build), whose history arrays the pair does
    not otherwise use: F in `ft`, j's torque r_j n x F - M in `ptq` (n the unit normal from i
-   to j, r_j n the contact point on j's side) and this pass's number `stamp[None]` in `pstamp`.
+   to j, r_j n the contact point on j's side) and the pass's step number `stamp` in `src`
+   (-1 from the neighbour build on, a step number once a force pass found the pair touching).
    A partner j > i out of range has its history cleared. Walls and tubes are done here too.
 2. `partner_forces`: particle i adds, for each listed partner j < i whose slot carries this
    pass's stamp, force -F (Newton's third law) and the handed torque. It reads no geometry and
@@ -193,7 +194,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.kernel
-    def own_forces(n: ti.i32, t: float, dt: float):
+    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32):
         if ti.static(heat):
             ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
             for s in range(n_surf):
@@ -202,10 +203,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.loop_config(serialize=True)
             for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                 S.tube_bin_rate[k, b] = 0.0
-        S.stamp[None] += 1  # this force pass's number (the partner pass reads it)
+        S.stamp[None] = stamp  # for the partner pass
         for i in range(n):
             if S.active[i]:
-                stamp = S.stamp[None]
                 xi = S.x[i]
                 ri = S.radius[i]
                 mi = S.mass[i]
@@ -252,7 +252,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             if mirror >= 0:  # handed to j: the force on i, the torque on j, the stamp
                                 S.ft[j, mirror] = f
                                 S.ptq[j, mirror] = (rj * nrm).cross(f) - m_roll
-                                S.pstamp[j, mirror] = stamp
+                                S.src[j, mirror] = stamp
                             if ti.static(heat):
                                 flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj)
                                 heat_in += flow
@@ -383,7 +383,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     continue  # done in own_forces
                 if ti.static(heat):
                     heat_in += S.qpair[i, k]
-                if S.pstamp[i, k] == stamp:  # the pair touches
+                if S.src[i, k] == stamp:  # the pair touches
                     force -= S.ft[i, k]
                     torque += S.ptq[i, k]
                     touching += 1

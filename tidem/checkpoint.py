@@ -30,7 +30,7 @@ FORMAT = 1
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # What a pair's owner hands its partner within one force pass (kernels/contact.py): every force
 # pass rewrites it, so it is not kept.
-HANDOVER = ("ptq", "pstamp", "stamp")
+HANDOVER = ("ptq", "stamp")
 
 
 class CheckpointError(RuntimeError):

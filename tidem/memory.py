@@ -99,7 +99,7 @@ def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
 def neighbor_bytes(feat, neighbors: int) -> int:
     """Bytes per particle of the neighbour list and its contact history (springs, heat rows)."""
     fp = 8 if feat.precision == "float64" else 4
-    per = neighbors * (4 * 4 + 6 * fp)  # nbr, nbr_new, src, pstamp, ft, ptq
+    per = neighbors * (4 * 3 + 6 * fp)  # nbr, nbr_new, src, ft, ptq
     if feat.rolling:
         per += 3 * fp * neighbors
     if feat.hysteretic:

@@ -18,8 +18,8 @@ Per-particle fields, shape [capacity]:
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
 In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) the owner
-hands over ft (the force on the owner [N]), ptq (the torque on this particle [N m]) and pstamp
-(the number of the force pass, stamp[None], that wrote them: the pair touches now).
+hands over ft (the force on the owner [N]), ptq (the torque on this particle [N m]) and, in src,
+the step of the force pass that wrote them (stamp[None]: the pair touches now).
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
 [capacity, K] (heat rate into the particle from that neighbour, written by the lower-index
 particle of the pair, read by the higher one; see kernels/contact.py); per
@@ -136,9 +136,7 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     for name in ("nbr", "nbr_new", "src"):
         p.per_particle((N, K), name, ti.i32)
     p.per_particle((N, K), "ft", n=3)
-    # the pair's owner hands the partner its torque, stamped with the force pass (kernels/contact.py)
-    p.place((N, K), "ptq", n=3)
-    p.place((N, K), "pstamp", ti.i32)
+    p.place((N, K), "ptq", n=3)  # handed by the pair's owner to its partner (kernels/contact.py)
     p.per_particle((N, W), "wid", ti.i32)
     p.per_particle((N, W), "wft", n=3)
     if feat.rolling:
