@@ -118,8 +118,11 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
     for n in sizes:
         for prec in precisions:
             k = max(200, steps * 10000 // max(n, 10000) if n > 50000 else steps)
-            env = dict(os.environ, TI_CPU_MAX_NUM_THREADS=str(threads))
-            proc = subprocess.run([sys.executable, "-c", f"import json, tidem.bench as b; "
+            # the child imports the tidem this process runs (not one in its working folder)
+            root = str(Path(__file__).resolve().parents[1])
+            env = dict(os.environ, TI_CPU_MAX_NUM_THREADS=str(threads),
+                       PYTHONPATH=os.pathsep.join([root] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
+            proc = subprocess.run([sys.executable, "-P", "-c", f"import json, tidem.bench as b; "
                                    f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads}, {str(bed) if bed else None!r})))"],
                                   capture_output=True, text=True, env=env)
             if proc.returncode != 0:
