@@ -4,21 +4,20 @@ Each contact is evaluated once, by its lower-index particle, in two kernels with
 per particle and no atomic sums (so runs are bit-reproducible whatever the thread count):
 1. `own_forces`: for each listed partner j > i inside contact range, the contact law
    (`contact_laws.make_contact_response`) updates the pair's history in i's row and gives
-   the force F on i and the rolling moment M on i. It hands j the rest in j's slot for i (the
-   mirror slot `src[i, k]`, found at the neighbour build), whose history arrays the pair does
-   not otherwise use: F in `ft`, j's torque r_j n x F - M in `ptq` (n the unit normal from i
-   to j, r_j n the contact point on j's side) and the pass's step number `stamp` in `src`
-   (-1 from the neighbour build on, a step number once a force pass found the pair touching).
-   A partner j > i out of range has its history cleared. Walls and tubes are done here too.
-2. `partner_forces`: particle i adds, for each listed partner j < i whose slot carries this
-   pass's stamp, force -F (Newton's third law) and the handed torque. It reads no geometry and
-   no partner, so the kick can run it while other particles already move on
+   the force F on i and the rolling moment M on i; both are also written into j's slot for i
+   (the mirror slot `src[i, k]`, found at the neighbour build), whose history arrays the
+   pair does not otherwise use. A partner j > i out of range has its history cleared. Walls
+   and tubes are done here too.
+2. `partner_forces`: for each listed partner j < i inside contact range, i reads its own slot:
+   force -F, torque -r_i n x F - M (n the unit normal from i to j; Newton's third law for the
+   force, and the contact point r_i n on i's side). It takes the positions from `xf`, where
+   own_forces copied them, so the kick can run it while other particles already move on
    (`kernels/integrate.py`).
 With heat, own_forces also evaluates each pair's conduction (contact spot and gas lens) once
 and writes minus the heat flow into i to `qpair[j, mirror]`, which partner_forces adds for
-every partner j < i. The contact count is computed in both passes, each for its own side of the
-row; the overlap check only by the pair's owner. Against the full list evaluated twice (one
-law per listed pair and side) this makes the force step 1.3x faster on the peer benchmark bed.
+every partner j < i. The overlap check and the contact count are computed in both passes,
+each for its own side of the row. Against the full list evaluated twice (one law per listed pair
+and side) this makes the force step 1.3x faster on the peer benchmark bed.
 
 Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is
 a plane with a velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Wall and tube contacts
@@ -27,9 +26,8 @@ set while surface s holds a slot, so particles away from every wall skip the sea
 touches more surfaces than it has slots is counted in `overflow[1]` (an error for the run).
 
 Gravity is added here: f_i = m_i g + sum of contact forces. `ovl[i]` receives the largest
-overlap relative to the smaller radius over the contacts particle i owns (its pairs with
-higher-index partners, its walls), so the largest ovl is the bed's; `ncontact[i]` its number
-of contacts (coordination number).
+overlap of particle i relative to the smaller radius of the pair, `ncontact[i]` its number of
+contacts (coordination number).
 """
 
 from types import SimpleNamespace
@@ -83,9 +81,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         return pfp_conductance(p, r_eff, gap / cg, delta_f / cg)
 
     @ti.func
-    def separation(xi, ri, j):
-        """Minimum-image separation x_j - x_i, r_j, r_i + r_j and the squared distance."""
-        d = min_image(S.x[j] - xi)
+    def separation(xi, ri, j, x: ti.template()):
+        """Minimum-image separation x_j - x_i (positions `x`), r_j, r_i + r_j and the squared distance."""
+        d = min_image(x[j] - xi)
         rj = S.radius[j]
         return d, rj, ri + rj, d.norm_sqr()
 
@@ -194,7 +192,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.kernel
-    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32):
+    def own_forces(n: ti.i32, t: float, dt: float):
         if ti.static(heat):
             ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
             for s in range(n_surf):
@@ -203,10 +201,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.loop_config(serialize=True)
             for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                 S.tube_bin_rate[k, b] = 0.0
-        S.stamp[None] = stamp  # for the partner pass
         for i in range(n):
             if S.active[i]:
                 xi = S.x[i]
+                S.xf[i] = xi  # for the partner pass
                 ri = S.radius[i]
                 mi = S.mass[i]
                 wi = S.w[i]
@@ -224,7 +222,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         if j < i:
                             continue  # evaluated by j; partner_forces adds it to i
                         mirror = S.src[i, k]  # -1 only in a row cut by overflow, which stops the run
-                        d, rj, rsum, dist2 = separation(xi, ri, j)
+                        d, rj, rsum, dist2 = separation(xi, ri, j, S.x)
                         if dist2 < rsum * rsum:
                             nrm, dist = unit_normal(d, dist2, rsum)
                             delta = rsum - dist
@@ -249,10 +247,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             force += f
                             torque += (ri * nrm).cross(f_t) + m_roll
                             S.ft[i, k] = xi_new
-                            if mirror >= 0:  # handed to j: the force on i, the torque on j, the stamp
+                            if mirror >= 0:
                                 S.ft[j, mirror] = f
-                                S.ptq[j, mirror] = (rj * nrm).cross(f) - m_roll
-                                S.src[j, mirror] = stamp
+                                if ti.static(rolling):
+                                    S.mr[j, mirror] = m_roll
                             if ti.static(heat):
                                 flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj)
                                 heat_in += flow
@@ -370,27 +368,38 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
 
     @ti.func
     def gather_partners(i, t):
-        """Add to particle i what its partners j < i handed over in this force pass (body of
-        partner_forces): no geometry, so it may run while other particles move on."""
+        """Add to particle i what its partners j < i handed over in own_forces (body of partner_forces),
+        at the positions of the force pass (`xf`), so that it may run while particles move on."""
+        xi = S.xf[i]
+        ri = S.radius[i]
         force = zero3
         torque = zero3
         heat_in = 0.0
+        worst = S.ovl[i]
         touching = S.ncontact[i]
-        stamp = S.stamp[None]
         if ti.static(pairs):
             for k in range(S.nbr_n[i]):
-                if S.nbr[i, k] > i:
+                j = S.nbr[i, k]
+                if j > i:
                     continue  # done in own_forces
                 if ti.static(heat):
-                    heat_in += S.qpair[i, k]
-                if S.src[i, k] == stamp:  # the pair touches
-                    force -= S.ft[i, k]
-                    torque += S.ptq[i, k]
+                    heat_in += S.qpair[i, k]  # written by j in own_forces
+                d, rj, rsum, dist2 = separation(xi, ri, j, S.xf)
+                if dist2 < rsum * rsum:
+                    nrm, dist = unit_normal(d, dist2, rsum)
+                    delta = rsum - dist
+                    f_j = S.ft[i, k]  # force on j, written by j in own_forces
+                    force -= f_j
+                    torque -= (ri * nrm).cross(f_j)
+                    if ti.static(rolling):
+                        torque -= S.mr[i, k]
+                    worst = ti.max(worst, delta / ti.min(ri, rj))
                     touching += 1
             S.f[i] += force
             S.tq[i] += torque
             if ti.static(heat):
                 S.q[i] += heat_in
+            S.ovl[i] = worst
             S.ncontact[i] = touching
             note_contact_time(i, touching, t)
 

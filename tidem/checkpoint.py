@@ -28,9 +28,8 @@ FORMAT = 1
 # Scene keys that may change between a run and its resume: output cadence, rendering, the
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
-# What a pair's owner hands its partner within one force pass (kernels/contact.py): every force
-# pass rewrites it, so it is not kept.
-HANDOVER = ("ptq", "stamp")
+# Rewritten by every force pass (the positions the partner pass reads, kernels/contact.py): not kept.
+TRANSIENT = ("xf",)
 
 
 class CheckpointError(RuntimeError):
@@ -38,11 +37,11 @@ class CheckpointError(RuntimeError):
 
 
 def _fields(solver) -> dict[str, Field]:
-    """Every Taichi field of the solver but the force pass's handover, by a stable name
-    ('state/x', 'gas/u/2', ...)."""
+    """Every Taichi field of the solver but the transient ones, by a stable name ('state/x',
+    'gas/u/2', ...)."""
     out = {}
     for name, value in sorted(vars(solver.state).items()):
-        if isinstance(value, Field) and name not in HANDOVER:
+        if isinstance(value, Field) and name not in TRANSIENT:
             out[f"state/{name}"] = value
     if solver.gas is not None:
         for name, value in sorted(vars(solver.gas.G).items()):

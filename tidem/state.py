@@ -8,18 +8,17 @@ Per-particle fields, shape [capacity]:
   x, v, w          position [m], velocity [m/s], angular velocity [rad/s]
   f, tq            force [N], torque [N m] of the last force evaluation
   x_build          position at the last neighbour build [m]
+  xf               position at the last force evaluation [m] (the partner pass reads it)
   r_build          radius at the last neighbour build [m] (only with growing particles)
   radius, mass, inv_mass [1/kg], inv_inertia [1/(kg m^2)], mat (material index), active
-  ovl              largest overlap / smaller radius over the contacts the particle owns (pairs
-                   with a higher-index partner, walls): the bed's largest is the largest ovl
+  ovl              largest overlap / smaller radius over the particle's contacts
   ncontact         number of contacts
   ident            the particle's index in the Model's arrays (storage is re-sorted into
                    cell order as the bed flows, `tidem.storage_order`)
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
-In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) the owner
-hands over ft (the force on the owner [N]), ptq (the torque on this particle [N m]) and, in src,
-the step of the force pass that wrote them (stamp[None]: the pair touches now).
+In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) ft holds
+the force on the owner [N], handed over by the owner's force pass.
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
 [capacity, K] (heat rate into the particle from that neighbour, written by the lower-index
 particle of the pair, read by the higher one; see kernels/contact.py); per
@@ -126,6 +125,7 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.per_particle((N,), "r_build")
     for name in ("f", "tq", "x_build"):
         p.per_particle((N,), name, n=3)
+    p.place((N,), "xf", n=3)  # the positions of the last force pass (kernels/contact.py)
     for name in ("inv_mass", "inv_inertia", "ovl"):
         p.per_particle((N,), name)
     for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask", "near"):
@@ -136,7 +136,6 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     for name in ("nbr", "nbr_new", "src"):
         p.per_particle((N, K), name, ti.i32)
     p.per_particle((N, K), "ft", n=3)
-    p.place((N, K), "ptq", n=3)  # handed by the pair's owner to its partner (kernels/contact.py)
     p.per_particle((N, W), "wid", ti.i32)
     p.per_particle((N, W), "wft", n=3)
     if feat.rolling:
@@ -160,8 +159,7 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_mask", n=3)
     p.place((NT,), "tube_r")
     p.S.max_disp = ti.field(p.fp)
-    p.S.stamp = ti.field(ti.i32)
-    p.fb.place(p.S.max_disp, p.S.stamp)
+    p.fb.place(p.S.max_disp)
 
 
 def _place_heat_fields(p: _Placer, model: Model) -> None:
