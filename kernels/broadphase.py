@@ -16,7 +16,8 @@ Algorithm (O(N) per rebuild):
 4. for every entry (i, k) with partner j > i, find the slot of i in j's row by binary search
    and keep it in `src[i, k]` (the mirror slot; -1 otherwise). The contact kernel evaluates a
    pair once, in the lower index's row, and hands the force to the partner through it
-   (`kernels/contact.py`); `src` is scratch of step 3 until then.
+   (`kernels/contact.py`); `src` is scratch of step 3 until then. For partners j < i it is -1,
+   and each force pass stamps it with its step while the pair touches (`kernels/contact.py`).
 
 A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
 error that names the setting to raise (never a silent drop).

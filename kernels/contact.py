@@ -8,11 +8,13 @@ per particle and no atomic sums (so runs are bit-reproducible whatever the threa
    (the mirror slot `src[i, k]`, found at the neighbour build), whose history arrays the
    pair does not otherwise use. A partner j > i out of range has its history cleared. Walls
    and tubes are done here too.
-2. `partner_forces`: for each listed partner j < i inside contact range, i reads its own slot:
-   force -F, torque -r_i n x F - M (n the unit normal from i to j; Newton's third law for the
-   force, and the contact point r_i n on i's side). It takes the positions from `xf`, where
-   own_forces copied them, so the kick can run it while other particles already move on
-   (`kernels/integrate.py`).
+   For a touching pair own_forces also stamps j's `src` slot for i (-1 from the neighbour build
+   on, unused there) with its step number `stamp`.
+2. `partner_forces`: for each listed partner j < i whose slot carries this step's stamp, i reads
+   its own slot: force -F, torque -r_i n x F - M (n the unit normal from i to j; Newton's third
+   law for the force, and the contact point r_i n on i's side). It takes the positions from
+   `xf`, where own_forces copied them, so the kick can run it while other particles already
+   move on (`kernels/integrate.py`), and it computes no geometry for pairs apart.
 With heat, own_forces also evaluates each pair's conduction (contact spot and gas lens) once
 and writes minus the heat flow into i to `qpair[j, mirror]`, which partner_forces adds for
 every partner j < i. The overlap check and the contact count are computed in both passes,
@@ -192,7 +194,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.kernel
-    def own_forces(n: ti.i32, t: float, dt: float):
+    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32):
         if ti.static(heat):
             ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
             for s in range(n_surf):
@@ -201,6 +203,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.loop_config(serialize=True)
             for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                 S.tube_bin_rate[k, b] = 0.0
+        S.stamp[None] = stamp  # for the partner pass
         for i in range(n):
             if S.active[i]:
                 xi = S.x[i]
@@ -247,8 +250,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             force += f
                             torque += (ri * nrm).cross(f_t) + m_roll
                             S.ft[i, k] = xi_new
-                            if mirror >= 0:
+                            if mirror >= 0:  # handed to j: the force on i, and the pair touches now
                                 S.ft[j, mirror] = f
+                                S.src[j, mirror] = stamp
                                 if ti.static(rolling):
                                     S.mr[j, mirror] = m_roll
                             if ti.static(heat):
@@ -377,6 +381,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         heat_in = 0.0
         worst = S.ovl[i]
         touching = S.ncontact[i]
+        stamp = S.stamp[None]
         if ti.static(pairs):
             for k in range(S.nbr_n[i]):
                 j = S.nbr[i, k]
@@ -384,8 +389,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     continue  # done in own_forces
                 if ti.static(heat):
                     heat_in += S.qpair[i, k]  # written by j in own_forces
-                d, rj, rsum, dist2 = separation(xi, ri, j, S.xf)
-                if dist2 < rsum * rsum:
+                if S.src[i, k] == stamp:  # j found the pair touching in this force pass
+                    d, rj, rsum, dist2 = separation(xi, ri, j, S.xf)
                     nrm, dist = unit_normal(d, dist2, rsum)
                     delta = rsum - dist
                     f_j = S.ft[i, k]  # force on j, written by j in own_forces

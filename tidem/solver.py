@@ -137,7 +137,7 @@ class Solver:
         self.rebuild()
         if self.gas is not None:
             self._gas_step()
-        self._own_forces(self.n, self.t, self.dt)
+        self._own_forces(self.n, self.t, self.dt, self.steps)
         self._finish_forces()
         self.check()
 
@@ -192,7 +192,7 @@ class Solver:
         if self.gas is not None and self.steps % self.gas.interval == 0:
             self._gas_step()
             t = clock()
-        self._own_forces(self.n, self.t, dt)
+        self._own_forces(self.n, self.t, dt, self.steps)
         t = lap("contact forces", t)
         if not self._fused:  # else the kick finishes the forces (partner pass, gas forces)
             self._finish_forces()

@@ -18,7 +18,8 @@ Per-particle fields, shape [capacity]:
 Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
 In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) ft holds
-the force on the owner [N], handed over by the owner's force pass.
+the force on the owner [N] and src the step of the last force pass that found the pair
+touching (stamp[None], the current pass's step), both written by the owner.
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
 [capacity, K] (heat rate into the particle from that neighbour, written by the lower-index
 particle of the pair, read by the higher one; see kernels/contact.py); per
@@ -159,7 +160,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_mask", n=3)
     p.place((NT,), "tube_r")
     p.S.max_disp = ti.field(p.fp)
-    p.fb.place(p.S.max_disp)
+    p.S.stamp = ti.field(ti.i32)
+    p.fb.place(p.S.max_disp, p.S.stamp)
 
 
 def _place_heat_fields(p: _Placer, model: Model) -> None:
