@@ -15,7 +15,7 @@ for case in "$@"; do
       cmd=$tidem; [ "$version" = before ] && cmd=${BEFORE:-}
       [ -z "$cmd" ] && continue
       dir="$out/$scene/$version/seed$seed"; mkdir -p "$(dirname "$dir")"
-      (cd "$out" && $cmd scene "$scene" --t-end "$t_end" --no-render --quiet --out "$dir" \
+      (cd "$(dirname "$dir")" && $cmd scene "$scene" --t-end "$t_end" --no-render --quiet --out "$dir" \
         --set "particles[0].seed=$seed" > "$dir.log" 2>&1) || { echo "failed: $dir (see $dir.log)"; continue; }
       python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(f'{sys.argv[2]:18} {sys.argv[3]:6} seed {sys.argv[4]}  {d[\"particle_steps_per_s\"]:.3g} particle-steps/s  wall {d[\"wall_s\"]:.1f} s  steps {d[\"steps\"]}')" \
         "$dir/run.json" "$scene" "$version" "$seed"

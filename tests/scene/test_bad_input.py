@@ -6,7 +6,7 @@ import pytest
 from typer.testing import CliRunner
 
 from tidem.cli import app
-from tidem.scene.load import resolve
+from tidem.scene.load import SceneError, resolve
 
 runner = CliRunner()
 
@@ -176,3 +176,16 @@ def test_bad_command_line_options(args, expected):
     result = runner.invoke(app, args)
     assert result.exit_code == 2, result.output
     assert expected in result.output and "Traceback" not in result.output
+
+
+def test_a_shipped_name_is_found_beside_an_output_folder_of_that_name(tmp_path, monkeypatch):
+    """`tidem scene sphere_impact --out sphere_impact` leaves a folder named like the scene; the next
+    `tidem scene sphere_impact` from there still means the shipped scene. A folder holding scene
+    files stays an error naming them."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sphere_impact").mkdir()
+    assert resolve("sphere_impact").name == "sphere_impact.toml"
+    assert resolve("sphere_impact").parent != tmp_path / "sphere_impact"
+    (tmp_path / "sphere_impact" / "mine.toml").write_text("")
+    with pytest.raises(SceneError, match="mine.toml"):
+        resolve("sphere_impact")

@@ -37,19 +37,21 @@ def shipped_scenes() -> dict[str, Path]:
 
 
 def resolve(name_or_path: str | None) -> Path:
-    """A file in the working folder wins; otherwise a shipped scene by name (with or without .toml)."""
+    """A file in the working folder wins; otherwise a shipped scene by name (with or without .toml),
+    also where a folder of that name holds no scene (e.g. a run's output folder, --out NAME)."""
     if name_or_path is None:
         name_or_path = DEFAULT_SCENE
     path = Path(name_or_path)
     if path.is_file():
         return path
-    if path.is_dir():
-        inside = sorted(p.name for p in path.glob("*.toml"))
+    shipped = shipped_scenes()
+    inside = sorted(p.name for p in path.glob("*.toml")) if path.is_dir() else []
+    bare_shipped = len(path.parts) == 1 and {path.name, path.name + ".toml"} & set(shipped)
+    if path.is_dir() and (inside or not bare_shipped):
         raise SceneError(str(name_or_path), [
             "this is a folder, not a scene file; give the .toml file "
             + (f"inside it ({', '.join(inside[:5])}{', ...' if len(inside) > 5 else ''})" if inside
                else "itself (this folder holds none)")])
-    shipped = shipped_scenes()
     for candidate in (path.name, path.name + ".toml"):
         if candidate in shipped:
             return shipped[candidate]
