@@ -39,6 +39,9 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     cells = grid.cells
     per = grid.periodic
     n_cells = grid.n_cells
+    # the neighbour cells along each axis: -1, 0, +1, or on a periodic axis of fewer than three
+    # cells each of its cells once (0, +1 wrapped), so that no cell is scanned twice
+    span = [(0, cells[a]) if per[a] and cells[a] < 3 else (-1, 2) for a in range(3)]
 
     @ti.kernel
     def count_cells(n: ti.i32):
@@ -84,7 +87,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             ri = S.radius[i]
             c0 = cell_coord(xi)
             count = 0
-            for dx, dy in ti.ndrange((-1, 2), (-1, 2)):
+            for dx, dy in ti.ndrange(span[0], span[1]):
                 c = c0 + ti.Vector([dx, dy, 0])
                 inside = True
                 for a in ti.static(range(2)):
@@ -93,12 +96,12 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                     elif c[a] < 0 or c[a] >= cells[a]:
                         inside = False
                 if inside:
-                    for part in ti.static(range(3 if per[2] else 1)):
+                    for part in ti.static(range(span[2][1] - span[2][0] if per[2] else 1)):
                         # the z column of cells is one run of sorted_idx (z varies fastest in cell_id);
-                        # a periodic z takes it in three parts
+                        # a periodic z takes it in parts, one per cell
                         z0, z1 = c0[2] - 1, c0[2] + 1
                         if ti.static(per[2]):
-                            z0 = (c0[2] + part - 1 + cells[2]) % cells[2]
+                            z0 = (c0[2] + part + span[2][0] + cells[2]) % cells[2]
                             z1 = z0
                         else:
                             z0, z1 = ti.max(z0, 0), ti.min(z1, cells[2] - 1)

@@ -96,7 +96,7 @@ def neighbour_grid(lo, lengths, periodic, capacity: int, reach: float) -> Grid:
     max(64 capacity, 2^20) cells."""
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
     while math.prod(cells) > max(64 * capacity, 1 << 20):
-        cells = [max(3 if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
+        cells = [max(min(c, 3) if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
     return Grid(lo=tuple(lo), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
 
 

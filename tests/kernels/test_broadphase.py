@@ -37,11 +37,15 @@ def listed_pairs(S, n):
     return {(i, int(nbr[i, k])) for i in range(n) for k in range(cnt[i])}
 
 
-@pytest.mark.parametrize("periodic", [["x", "y"], [], ["z"], ["x", "y", "z"]])
-def test_neighbour_list_matches_brute_force(solver_for, periodic):
+THIN = np.array([0.02, 0.0055, 0.0055])  # y and z: 2 search cells of the 2.6 mm reach (2 mm spheres, skin 0.3)
+
+
+@pytest.mark.parametrize("periodic, hi, n", [(["x", "y"], None, 400), ([], None, 400), (["z"], None, 400),
+                                             (["x", "y", "z"], None, 400), (["y"], THIN, 40), (["y", "z"], THIN, 40)])
+def test_neighbour_list_matches_brute_force(solver_for, periodic, hi, n):
+    """Also for periodic axes of two search cells (a slab a few grains deep), each scanned once."""
     rng = np.random.default_rng(11)
-    n = 400
-    lo, hi = np.array([0.0, 0.0, 0.0]), np.array([0.02, 0.018, 0.015])
+    lo, hi = np.array([0.0, 0.0, 0.0]), np.array([0.02, 0.018, 0.015]) if hi is None else hi
     x = random_spheres(rng, n, lo + 0.001, hi - 0.001, 0.002)
     raw = make_scene(
         domain={"min": lo.tolist(), "max": hi.tolist(), "periodic": periodic, "walls": "none", "gravity": [0, 0, 0]},
@@ -50,6 +54,7 @@ def test_neighbour_list_matches_brute_force(solver_for, periodic):
         numerics={"skin": 0.3, "max_neighbors": 64},
     )
     s = solver_for(raw)
+    assert all(s.model.grid.cells[a] == 2 for a in range(3) if hi[a] < 0.01), "thin axes must have two cells"
     S = s.state
     r = S.radius.to_numpy()
     lengths = hi - lo

@@ -305,9 +305,11 @@ def cross_checks(scene: Scene) -> list[str]:
     for ax in dom.periodic:
         a = AXES.index(ax)
         length = dom.max[a] - dom.min[a]
-        if dmax > 0 and length < 3 * cell:
+        if dmax > 0 and length < 2 * cell:  # a particle would meet two images of one neighbour
             errs.append(
                 f"domain.periodic: the domain is {length:g} m long along periodic axis {ax}, "
-                f"less than 3 search cells ({3 * cell:g} m); make it longer or drop '{ax}' from periodic"
+                f"less than twice the neighbour search reach ({2 * cell:g} m: the largest diameter times "
+                f"1 + numerics.skin + half heat.fluid_layer); make it longer, lower numerics.skin or "
+                f"drop '{ax}' from periodic"
             )
     return errs
