@@ -1,7 +1,8 @@
 """`Solver.advance(k)` runs each step's closing kick and the next step's kick-drift in one
-kernel (`kernels/integrate.py`), with the contacts' partner pass reading only what each pair's
-owner handed over (`kernels/contact.py`). Neither may change a bit: a partner pass that read a
-neighbour already moved on, or a compiler merging the two half-kicks, shows at 1e-16 and more.
+kernel (`kernels/integrate.py`), with the contacts' partner pass reading the positions of the
+force pass and the owners' touching stamps (`kernels/contact.py`). Neither may change a bit: a
+partner pass that read a neighbour already moved on, or a compiler merging the two half-kicks,
+shows at 1e-16 and more.
 The merging needs Taichi's IR optimization, which the suite otherwise leaves off (conftest), so
 these kernels are compiled with it, as a run compiles them."""
 
@@ -16,7 +17,7 @@ FIELDS = ("x", "v", "w", "f", "tq", "T", "ft", "mr", "ncontact")
 
 def hot_and_cold_bed() -> dict:
     """The sheared, settling bed of test_storage_order with rolling friction, half of it hot:
-    contacts hand over forces, torques, rolling moments and heat."""
+    contacts hand over forces, rolling moments and heat."""
     raw = shuffled_bed(3)
     group = raw["particles"][0]
     x = group["positions"]

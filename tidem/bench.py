@@ -73,10 +73,10 @@ def bench_scene(x: np.ndarray, extent, precision: str) -> dict:
 
 
 def advance(solver, steps: int) -> None:
-    """Take steps in windows of 50, as the run loop does between progress updates."""
-    while steps > 0:
-        solver.advance(min(steps, 50))
-        steps -= 50
+    """Take `steps` steps in the windows the run loop uses between progress updates (no outputs)."""
+    last = solver.steps + steps
+    while solver.steps < last:
+        solver.advance(solver.steps_until(lambda t: False, 50, last))
 
 
 def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None = None) -> dict:
@@ -115,13 +115,13 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
     rows = []
     print(f"{'N':>8} {'precision':>9} {'threads':>7} {'steps':>6} {'loop s':>8} {'particle-steps/s':>17} "
           f"{'B/particle (fields)':>20} {'peak RSS MiB':>12}")
+    # each case's child imports the tidem this process runs (not one in its working folder)
+    root = str(Path(__file__).resolve().parents[1])
+    env = dict(os.environ, TI_CPU_MAX_NUM_THREADS=str(threads),
+               PYTHONPATH=os.pathsep.join([root] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
     for n in sizes:
         for prec in precisions:
             k = max(200, steps * 10000 // max(n, 10000) if n > 50000 else steps)
-            # the child imports the tidem this process runs (not one in its working folder)
-            root = str(Path(__file__).resolve().parents[1])
-            env = dict(os.environ, TI_CPU_MAX_NUM_THREADS=str(threads),
-                       PYTHONPATH=os.pathsep.join([root] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
             proc = subprocess.run([sys.executable, "-P", "-c", f"import json, tidem.bench as b; "
                                    f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads}, {str(bed) if bed else None!r})))"],
                                   capture_output=True, text=True, env=env)
