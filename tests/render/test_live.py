@@ -31,11 +31,13 @@ def xvfb():
         pytest.skip("Xvfb is not installed (apt-get install -y --no-install-recommends xvfb xauth)")
     # Each xdist worker starts at a display number of its own: with -displayfd alone, two
     # workers raced for :0 as one server shut down while the other started (CI, 2026-11-25).
+    # -noreset: by default the server resets when its last client leaves, and a window opened
+    # during that reset fails ("Taichi fails to create a window", CI, 2026-11-25, under load).
     worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw") or 0)
     for number in range(90 + 10 * worker, 100 + 10 * worker):
         r, w = os.pipe()
         server = subprocess.Popen(["Xvfb", f":{number}", "-displayfd", str(w), "-screen", "0",
-                                   f"{SCREEN[0]}x{SCREEN[1]}x24", "-nolisten", "tcp"],
+                                   f"{SCREEN[0]}x{SCREEN[1]}x24", "-nolisten", "tcp", "-noreset"],
                                   pass_fds=(w,), stderr=subprocess.DEVNULL)
         os.close(w)
         with os.fdopen(r) as fh:
