@@ -46,9 +46,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
                       surface_reach: float = 0.0, grain_scale: float = 1.0):
-    """Return a namespace of the two passes: kernels `own(n, t, dt)` and `partner(n, t)` (None
-    without pairs), and `gather(i, t)`, the partner pass for one particle as a Taichi func (for
-    a kernel that fuses it with the rest of the step, `kernels/integrate.py`); `single_material` loads the pair parameters once per
+    """Return a namespace of the two passes: kernels `own(n, t, dt, stamp)` and `partner(n, t)` (None
+    without pairs); and as Taichi funcs, for kernels that fuse them with the rest of the step
+    (`kernels/integrate.py`), `own_pass(n, t, dt, stamp)`, the body of `own`, and `gather(i, t)`, the
+    partner pass for one particle. `single_material` loads the pair parameters once per
     particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
     the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
     with `angle_bins` the heat flow from each tube by angle omega of the contact point from the
@@ -193,8 +194,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         if ti.static(angle_bins > 0 and s >= n_planes):
             ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
-    @ti.kernel
-    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32):
+    @ti.func
+    def own_pass(n, t, dt, stamp):
+        """The body of `own_forces`: a Taichi func, so that a kernel can run it and the kick in one launch
+        (`kernels/integrate.py`)."""
         if ti.static(heat):
             ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
             for s in range(n_surf):
@@ -357,6 +360,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     note_contact_time(i, touching, t)
 
     @ti.kernel
+    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32):
+        own_pass(n, t, dt, stamp)
+
+    @ti.kernel
     def mark_near_surfaces(n: ti.i32):
         """near[i] bit s: static surface s is within reach of particle i (called after each neighbour
         build; until the next one no particle moves more than half the skin)."""
@@ -414,5 +421,5 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             if S.active[i]:
                 gather_partners(i, t)
 
-    return SimpleNamespace(own=own_forces, partner=partner_forces if pairs else None, gather=gather_partners,
-                           mark_near=mark_near_surfaces if cull else None)
+    return SimpleNamespace(own=own_forces, own_pass=own_pass, partner=partner_forces if pairs else None,
+                           gather=gather_partners, mark_near=mark_near_surfaces if cull else None)

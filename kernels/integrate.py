@@ -4,7 +4,7 @@ Step n -> n+1 (as in LAMMPS' fix nve/sphere):
   kick_drift:  v += dt/2 f/m,  w += dt/2 T/I,  x += dt v   (then periodic wrap)
   (forces at the new positions, with the half-step velocities in the dashpots)
   kick:        v += dt/2 f/m,  w += dt/2 T/I
-`kick_drift` also returns the largest displacement since the last neighbour build (kept in
+`kick_drift` also finds the largest displacement since the last neighbour build (kept in
 `max_disp[None]`); the run loop rebuilds the Verlet list when it exceeds half the skin. When
 the host needs nothing between two steps, `kick(..., drift=1)` goes on with the next step's
 kick-drift for each particle in the same loop, which saves a kernel launch and a pass over the
@@ -20,13 +20,18 @@ from .geometry import make_geometry
 
 
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
-                     growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=()):
-    """Return (kick_drift(n, dt) -> max displacement, kick(n, t, dt, drift) -> max displacement
-    after the next step's kick-drift when drift = 1, else 0 (drift: 0 or 1)); with heat, `kick` also advances temperatures
+                     growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None):
+    """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, stamp,
+    drift)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
+    (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
+    drift: 0 or 1; a kernel's return value would cost the host more than reading the field). With heat, `kick` also advances temperatures
     explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s.
     `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
     (the partner pass of the contact forces, the gas forces); `kick` calls them on each particle
     first, which saves a kernel launch and a pass over the particles per step.
+    `forces`: a Taichi func forces(n, t, dt, stamp) (the contacts' own pass, `kernels/contact.py`);
+    `forces_and_kick` runs it and then the kick in one kernel launch: one Python call and one
+    wake-up of the thread pool less per step (None without `forces`).
 
     With `foil`, each heated-foil tube k (tube_foil[k] = (q_el, C_A, A_bin, G / ds^2), q_el > 0)
     advances its foil temperature per angle bin b with the same flows the particles received:
@@ -68,15 +73,15 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         return moved
 
     @ti.kernel
-    def kick_drift(n: ti.i32, dt: float) -> float:
+    def kick_drift(n: ti.i32, dt: float):
         S.max_disp[None] = 0.0
         for i in range(n):
             if S.active[i]:
                 ti.atomic_max(S.max_disp[None], drift_particle(i, dt, 0))
-        return S.max_disp[None]
 
-    @ti.kernel
-    def kick(n: ti.i32, t: float, dt: float, drift: ti.i32) -> float:
+    @ti.func
+    def kick_pass(n, t, dt, drift):
+        """The body of `kick` (a Taichi func, so that `forces_and_kick` can run it after the forces)."""
         S.max_disp[None] = 0.0
         # the surface loops have a few items each: serial, without a thread-pool round trip
         if ti.static(heat):
@@ -116,6 +121,17 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                     S.T[i] += dt * S.q[i] * S.inv_heat_cap[i]
                 if drift:
                     ti.atomic_max(S.max_disp[None], drift_particle(i, dt, drift >> 1))
-        return S.max_disp[None]
 
-    return kick_drift, kick
+    @ti.kernel
+    def kick(n: ti.i32, t: float, dt: float, drift: ti.i32):
+        kick_pass(n, t, dt, drift)
+
+    if forces is None:
+        return kick_drift, kick, None
+
+    @ti.kernel
+    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, drift: ti.i32):
+        forces(n, t, dt, stamp)
+        kick_pass(n, t, dt, drift)
+
+    return kick_drift, kick, forces_and_kick

@@ -19,10 +19,12 @@ import taichi as ti
 # pair's lower-index particle evaluates the contact (and the walls and tubes); "kick": the
 # second half kick, which in scenes without reactions also runs the contacts' partner pass and
 # adds the gas forces, and between outputs the next step's kick-drift (one kernel,
-# `tidem.solver`: "kick-drift" then counts only the first step after each output); "gas coupling": voidage, drag and heat
+# `tidem.solver`: "kick-drift" then counts only the first step after each output); "forces and
+# kick": the two in one kernel launch, as a run without reactions takes them (`tidem bench
+# --profile` runs them as kernels of their own to tell them apart); "gas coupling": voidage, drag and heat
 # exchange coefficients at each gas step (and the gas forces, with reactions).
 PHASES = ("kick-drift", "neighbour build", "contact forces", "gas coupling", "gas flow", "pressure solve",
-          "reactions", "inflow and outflow", "kick", "checks", "output")
+          "reactions", "inflow and outflow", "kick", "forces and kick", "checks", "output")
 clock = time.perf_counter
 
 

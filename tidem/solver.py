@@ -6,9 +6,11 @@ every `numerics.sort_interval` rebuilds first a re-sort of particle storage into
 (`tidem.storage_order`), a gas step every `gas.coupling_interval` steps (scenes with gas),
 forces (contacts, then drag and pressure-gradient force), reactions (with a rebuild when a
 particle burnt out or left), kick. Without reactions the kick kernel itself finishes the
-forces (the contacts' partner pass and the gas forces), and `advance(k)`, which the run loop
-calls between outputs, has each kick go on with the next step's kick-drift: a step is then two
-kernel launches (forces, kick), bit for bit the same as k calls of `step()`.
+forces (the contacts' partner pass and the gas forces), the contacts' own pass and the kick
+are one kernel launch (`forces_and_kick`), and `advance(k)`, which the run loop calls between
+outputs, has each kick go on with the next step's kick-drift: a step is then one kernel launch
+(plus the gas step and the neighbour build when due), bit for bit the same as k calls of
+`step()` and as separate kernels (`split_passes`, which `tidem bench --profile` sets).
 Each phase's wall time is booked in `timer` (`tidem.phases`, run.json's profile). Health
 checks (NaN, runaway overlap, capacity overflow) run every `numerics.check_interval` steps
 and raise `RunError` naming the particle and the fix.
@@ -60,7 +62,8 @@ class Solver:
         self.t = 0.0
         self.steps = 0
         self.rebuilds = 0
-        self._drifted = None  # within advance(): the next step's kick-drift is done, its largest displacement
+        self._drift_done = False  # within advance(): the next step's kick-drift is done
+        self.split_passes = False  # run forces and kick as kernels of their own (`tidem bench --profile` tells them apart)
         self.timer = PhaseTimer()  # seconds per phase of the step (run.json's profile)
         forces = self._build_contacts()
         self.gas = None
@@ -109,9 +112,9 @@ class Solver:
         finish = ()
         if self._fused:
             finish = ((forces.gather,) if f.contacts else ()) + ((self.gas.force,) if self.gas else ())
-        self._kick_drift, self._kick = map(hot, make_integrators(model.grid, self.state, f.heat, f.n_planes + f.n_tubes,
-                                                                 model.angle_bins, f.foil, f.growth, f.wall_foil,
-                                                                 f.n_planes, finish))
+        kernels = make_integrators(model.grid, self.state, f.heat, f.n_planes + f.n_tubes, model.angle_bins, f.foil,
+                                   f.growth, f.wall_foil, f.n_planes, finish, forces.own_pass if self._fused else None)
+        self._kick_drift, self._kick, self._forces_and_kick = (hot(k) if k is not None else None for k in kernels)
 
     def _build_sources_and_sinks(self) -> None:
         """Outlet recycling (`kernels/outlet.py`), pours (`tidem.pour`) and reactions
@@ -174,12 +177,12 @@ class Solver:
         dt = self.dt
         lap = self.timer.lap
         t = clock()
-        if self._drifted is None:
-            self._drifted = self._kick_drift(self.n, dt)
+        if not self._drift_done:
+            self._kick_drift(self.n, dt)
         self.t += dt
         self.steps += 1
-        need = self._drifted > 0.5 * self.model.skin
-        self._drifted = None
+        need = self.state.max_disp[None] > 0.5 * self.model.skin
+        self._drift_done = False
         t = lap("kick-drift", t)
         if self._recycle is not None:
             need |= self._recycle(self.n) > 0
@@ -192,19 +195,22 @@ class Solver:
         if self.gas is not None and self.steps % self.gas.interval == 0:
             self._gas_step()
             t = clock()
-        self._own_forces(self.n, self.t, dt, self.steps)
-        t = lap("contact forces", t)
-        if not self._fused:  # else the kick finishes the forces (partner pass, gas forces)
-            self._finish_forces()
+        if self._fused and not self.split_passes:  # one launch: own pass, then the kick finishes the forces
+            self._forces_and_kick(self.n, self.t, dt, self.steps, int(drift_next))
+            t = lap("forces and kick", t)
+        else:
+            self._own_forces(self.n, self.t, dt, self.steps)
             t = lap("contact forces", t)
-            left = self.gas.interval - 1 - self.steps % self.gas.interval if self.gas is not None else 0
-            if self._react(self.n, self.t, dt, left) > 0:
-                self.rebuild()  # partners of a removed particle drop it (and their history with it) at once
-            t = lap("reactions", t)
-        moved = self._kick(self.n, self.t, dt, int(drift_next))
-        if drift_next:
-            self._drifted = moved  # the next step's kick-drift is done: its largest displacement
-        t = lap("kick", t)
+            if not self._fused:  # else the kick finishes the forces (partner pass, gas forces)
+                self._finish_forces()
+                t = lap("contact forces", t)
+                left = self.gas.interval - 1 - self.steps % self.gas.interval if self.gas is not None else 0
+                if self._react(self.n, self.t, dt, left) > 0:
+                    self.rebuild()  # partners of a removed particle drop it (and their history with it) at once
+                t = lap("reactions", t)
+            self._kick(self.n, self.t, dt, int(drift_next))
+            t = lap("kick", t)
+        self._drift_done = drift_next  # the next step's kick-drift is done; max_disp holds its largest displacement
         if self.steps % self._check_every == 0:
             self.check()
             t = lap("checks", t)
