@@ -28,9 +28,11 @@ import taichi as ti
 from .geometry import make_geometry
 
 
-def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False):
-    """Return `rebuild()` that refreshes `S.nbr`, `S.nbr_n`, moves the contact history and finds
-    the mirror slots `S.src`.
+def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False,
+                          after=()):
+    """Return the kernel `rebuild(n)` that refreshes `S.nbr`, `S.nbr_n`, moves the contact history
+    and finds the mirror slots `S.src`; steps 1-4 and then the Taichi funcs f(n) in `after` run in
+    one kernel launch.
 
     S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
     grow) each row also records the particle's radius at the build, `S.r_build`.
@@ -43,8 +45,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     # cells each of its cells once (0, +1 wrapped), so that no cell is scanned twice
     span = [(0, cells[a]) if per[a] and cells[a] < 3 else (-1, 2) for a in range(3)]
 
-    @ti.kernel
-    def count_cells(n: ti.i32):
+    @ti.func
+    def count_cells(n):
         for c in range(n_cells):
             S.cell_count[c] = 0
         for i in range(n):
@@ -53,7 +55,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 S.pcell[i] = c
                 ti.atomic_add(S.cell_count[c], 1)
 
-    @ti.kernel
+    @ti.func
     def prefix_sum():
         run = 0
         ti.loop_config(serialize=True)
@@ -62,8 +64,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             S.cell_fill[c] = run
             run += S.cell_count[c]
 
-    @ti.kernel
-    def scatter(n: ti.i32):
+    @ti.func
+    def scatter(n):
         for i in range(n):
             if S.active[i]:
                 slot = ti.atomic_add(S.cell_fill[S.pcell[i]], 1)
@@ -77,8 +79,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         if ti.static(hysteretic):
             S.dmax[i, dst] = S.dmax[i, src]
 
-    @ti.kernel
-    def build_rows(n: ti.i32):
+    @ti.func
+    def build_rows(n):
         for i in range(n):
             if not S.active[i]:
                 S.nbr_n[i] = 0
@@ -156,8 +158,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             if ti.static(growth):
                 S.r_build[i] = S.radius[i]
 
-    @ti.kernel
-    def mirror_rows(n: ti.i32):
+    @ti.func
+    def mirror_rows(n):
         for i in range(n):
             for k in range(S.nbr_n[i]):
                 j = S.nbr[i, k]
@@ -177,11 +179,14 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                             hi = mid - 1
                 S.src[i, k] = found
 
-    def rebuild(n: int) -> None:
+    @ti.kernel
+    def rebuild(n: ti.i32):
         count_cells(n)
         prefix_sum()
         scatter(n)
         build_rows(n)
         mirror_rows(n)
+        for then in ti.static(after):
+            then(n)
 
     return rebuild

@@ -64,7 +64,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's temperature plane_foil_T[s].
     `cull` (bit s: surface s does not move) lets each particle skip the static surfaces farther
     than `surface_reach` (skin plus the conduction reach) at the last neighbour build, as marked
-    in S.near by the kernel `mark_near(n)` (None without culling); a particle far from every
+    in S.near by the Taichi func `mark_near(n)` (None without culling; the neighbour build runs it); a particle far from every
     wall and tube then costs no surface evaluation at all. `grain_scale` k > 1: every particle
     is a parcel of k^3 grains (one k per scene with heat) and conducts as those grains do
     (kernels/heat.py)."""
@@ -363,10 +363,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32):
         own_pass(n, t, dt, stamp)
 
-    @ti.kernel
-    def mark_near_surfaces(n: ti.i32):
-        """near[i] bit s: static surface s is within reach of particle i (called after each neighbour
-        build; until the next one no particle moves more than half the skin)."""
+    @ti.func
+    def mark_near_surfaces(n):
+        """near[i] bit s: static surface s is within reach of particle i (run after each neighbour
+        build, in its kernel; until the next one no particle moves more than half the skin)."""
         for i in range(n):
             if S.active[i]:
                 bits = 0

@@ -89,16 +89,16 @@ class Solver:
         """The neighbour builder (none without contacts) and the force kernels (`kernels/contact.py`:
         contact law, walls and tubes, heat conduction and radiation in the same pair loop)."""
         model, f, S = self.model, self.model.features, self.state
-        self._rebuild = None
-        if f.contacts:
-            self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
-                                                      f.rolling, f.hysteretic, S, f.growth))
         forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes, f.n_tubes,
                                    model.wall_slots, model.gravity, S, f.contact_time,
                                    model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
                                    model.skin + model.heat_reach, model.grain_scale)
-        self._mark_near = forces.mark_near
+        self._rebuild = None
+        if f.contacts:  # one launch: the list, then the surfaces in reach (culling)
+            after = (forces.mark_near,) if forces.mark_near is not None else ()
+            self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
+                                                      f.rolling, f.hysteretic, S, f.growth, after))
         return forces
 
     def _build_integrators(self, forces) -> None:
@@ -233,8 +233,6 @@ class Solver:
             if self._sort_every and self.rebuilds % self._sort_every == 0:
                 sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
             self._rebuild(self.n)
-            if self._mark_near is not None:
-                self._mark_near(self.n)
             self.rebuilds += 1
 
     def _gas_step(self) -> None:
