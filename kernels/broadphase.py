@@ -18,6 +18,8 @@ Algorithm (O(N) per rebuild):
    pair once, in the lower index's row, and hands the force to the partner through it
    (`kernels/contact.py`); `src` is scratch of step 3 until then. For partners j < i it is -1,
    and each force pass stamps it with its step while the pair touches (`kernels/contact.py`).
+   `split[i]` counts the entries with j < i: the force pass's own loop starts there and the
+   partner pass ends there.
 
 A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
 error that names the setting to raise (never a silent drop).
@@ -30,9 +32,9 @@ from .geometry import make_geometry
 
 def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False,
                           after=()):
-    """Return the kernel `rebuild(n)` that refreshes `S.nbr`, `S.nbr_n`, moves the contact history
-    and finds the mirror slots `S.src`; steps 1-4 and then the Taichi funcs f(n) in `after` run in
-    one kernel launch.
+    """Return the kernels `rebuild(n)`, which refreshes `S.nbr`, `S.nbr_n`, moves the contact history
+    and finds the mirror slots `S.src` and `S.split` (steps 1-4, then the Taichi funcs f(n) in
+    `after`, in one kernel launch), and `count_split(n)`, which finds `S.split` of the rows as they are.
 
     S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
     grow) each row also records the particle's radius at the build, `S.r_build`.
@@ -161,10 +163,13 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     @ti.func
     def mirror_rows(n):
         for i in range(n):
+            below = 0
             for k in range(S.nbr_n[i]):
                 j = S.nbr[i, k]
                 found = -1
-                if j > i:
+                if j < i:
+                    below += 1
+                else:
                     lo = 0
                     hi = S.nbr_n[j] - 1
                     while lo <= hi:
@@ -178,6 +183,17 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         else:
                             hi = mid - 1
                 S.src[i, k] = found
+            S.split[i] = below
+
+    @ti.kernel
+    def count_split(n: ti.i32):
+        """`split` from the rows alone (after a checkpoint restored them)."""
+        for i in range(n):
+            below = 0
+            for k in range(S.nbr_n[i]):
+                if S.nbr[i, k] < i:
+                    below += 1
+            S.split[i] = below
 
     @ti.kernel
     def rebuild(n: ti.i32):
@@ -189,4 +205,4 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         for then in ti.static(after):
             then(n)
 
-    return rebuild
+    return rebuild, count_split

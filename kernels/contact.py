@@ -223,10 +223,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 heat_in = 0.0
                 p_same = S.pp[0, 0]
                 if ti.static(pairs):  # contact.model = 'none' compiles no pair loop
-                    for k in range(S.nbr_n[i]):
+                    for k in range(S.split[i], S.nbr_n[i]):  # the partners j > i (j < i: partner_forces)
                         j = S.nbr[i, k]
-                        if j < i:
-                            continue  # evaluated by j; partner_forces adds it to i
                         mirror = S.src[i, k]  # -1 only in a row cut by overflow, which stops the run
                         d, rj, rsum, dist2 = separation(xi, ri, j, S.x)
                         if dist2 < rsum * rsum:
@@ -390,10 +388,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         touching = S.ncontact[i]
         stamp = S.stamp[None]
         if ti.static(pairs):
-            for k in range(S.nbr_n[i]):
+            for k in range(S.split[i]):  # the partners j < i (the row is sorted; the rest was done in own_forces)
                 j = S.nbr[i, k]
-                if j > i:
-                    continue  # done in own_forces
                 if ti.static(heat):
                     heat_in += S.qpair[i, k]  # written by j in own_forces
                 if S.src[i, k] == stamp:  # j found the pair touching in this force pass

@@ -29,7 +29,7 @@ FORMAT = 1
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # Rewritten by every force pass (the positions the partner pass reads, kernels/contact.py): not kept.
-TRANSIENT = ("xf", "stamp")
+TRANSIENT = ("xf", "stamp", "split")  # rewritten before use (split: by `restore`, from the rows)
 
 
 class CheckpointError(RuntimeError):
@@ -140,6 +140,7 @@ def restore(solver, meta: dict, arrays: dict) -> None:
             raise CheckpointError(f"{name}: checkpoint shape {arrays[name].shape} does not match the scene's "
                                   f"{fld.to_numpy().shape}")
         fld.from_numpy(arrays[name])
+    solver.restored()
     s = meta["solver"]
     solver.t, solver.steps, solver.rebuilds, solver.profile_t0 = s["t"], s["steps"], s["rebuilds"], s["profile_t0"]
     if solver.gas is not None:

@@ -81,7 +81,7 @@ def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
     """Bytes of the Taichi fields per particle (`tidem.state.State`) other than the neighbour
     and contact-history rows; `feat` has the attributes of `tidem.model.Features` used here."""
     fp = 8 if feat.precision == "float64" else 4
-    per = fp * (3 * 8 + 6) + 4 * 8  # vectors x v w f tq x_build xf + scalars; ints
+    per = fp * (3 * 8 + 6) + 4 * 9  # vectors x v w f tq x_build xf + scalars; ints
     per += wall_slots * (4 + 3 * fp)
     if feat.rolling:
         per += 3 * fp * wall_slots

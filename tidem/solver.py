@@ -94,11 +94,13 @@ class Solver:
                                    model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
                                    model.skin + model.heat_reach, model.grain_scale)
-        self._rebuild = None
+        self._rebuild = self._count_split = None
         if f.contacts:  # one launch: the list, then the surfaces in reach (culling)
             after = (forces.mark_near,) if forces.mark_near is not None else ()
-            self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
-                                                      f.rolling, f.hysteretic, S, f.growth, after))
+            rebuild, self._count_split = make_neighbor_builder(model.grid, model.max_neighbors,
+                                                               model.skin + model.heat_reach, f.rolling, f.hysteretic,
+                                                               S, f.growth, after)
+            self._rebuild = hot(rebuild)
         return forces
 
     def _build_integrators(self, forces) -> None:
@@ -234,6 +236,11 @@ class Solver:
                 sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
             self._rebuild(self.n)
             self.rebuilds += 1
+
+    def restored(self) -> None:
+        """Recompute what a checkpoint leaves out (`tidem.checkpoint.TRANSIENT`) after `checkpoint.restore`."""
+        if self._count_split is not None:
+            self._count_split(self.n)
 
     def _gas_step(self) -> None:
         try:

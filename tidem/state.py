@@ -129,7 +129,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((N,), "xf", n=3)  # the positions of the last force pass (kernels/contact.py)
     for name in ("inv_mass", "inv_inertia", "ovl"):
         p.per_particle((N,), name)
-    for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask", "near"):
+    # split: the row's entries with partners j < i (kernels/broadphase.py)
+    for name in ("active", "nbr_n", "split", "pcell", "ncontact", "sorted_idx", "wmask", "near"):
         p.per_particle((N,), name, ti.i32)
     if feat.contact_time:
         p.per_particle((N,), "touch_start")

@@ -31,7 +31,7 @@ from tidem.placement import spatial_key
 
 SORT_MIN_PARTICLES = 1024  # smaller scenes fit in cache in any order and keep theirs
 ROW_FIELDS = ("nbr", "ft", "mr", "dmax", "qpair")  # [capacity, K] fields that follow their row's order
-SCRATCH = ("nbr_new", "src", "sorted_idx", "pcell")  # rewritten by the next neighbour build
+SCRATCH = ("nbr_new", "src", "split", "sorted_idx", "pcell")  # rewritten by the next neighbour build
 HISTORY = {"ft": -1.0, "mr": -1.0, "dmax": 1.0}  # pair history, and its sign seen from the partner
 
 
