@@ -2,11 +2,13 @@
 level below `tidem bench --profile`'s phases.
 
     python benchmarks/kernel_profile.py SCENE RUN_DIR [STEPS [THREADS]] [KEY=VALUE ...]
+    python benchmarks/kernel_profile.py peer:N - [STEPS [THREADS]]
 
 RUN_DIR holds a checkpoint.npz of SCENE (e.g. `tidem scene fluidized_tube --t-end 0.3 --out RUN_DIR
---no-render`). Runs 50 warm-up steps, then STEPS (default 1000) with THREADS (default 2) CPU
-threads, and prints the kernels by total time (the counts include the warm-up; the profiler adds a
-little time to each launch).
+--no-render`); `peer:N` is instead the N-particle peer benchmark bed of `tidem bench` (float64,
+from rest). Runs 50 warm-up steps (300 for the peer bed), then STEPS (default 1000) with THREADS
+(default 2) CPU threads, and prints the kernels by total time (the counts include the warm-up;
+the profiler adds a little time to each launch).
 """
 
 import sys
@@ -15,20 +17,27 @@ from pathlib import Path
 import taichi as ti
 
 from tidem import runtime
-from tidem.bench import profile_scene
+from tidem.bench import bench_scene, profile_scene, tiled_bed
 from tidem.cli import _checkpoint
 from tidem.cli_common import build_or_exit, load_scene
+from tidem.model import build_model
+from tidem.scene.load import validate
 
 
 def main(scene: str, run_dir: str, steps: int = 1000, threads: int = 2, sets: list[str] = ()) -> None:
-    loaded = load_scene(scene, list(sets))
-    fp = ti.f64 if loaded.scene.numerics.precision == "float64" else ti.f32
-    ti.init(arch=ti.cpu, default_fp=fp, default_ip=ti.i32, cpu_max_num_threads=threads, offline_cache=True,
-            kernel_profiler=True, log_level=ti.ERROR)
-    runtime._current = ("cpu", loaded.scene.numerics.precision, threads)  # tidem's own init would reset the profiler
-    model = build_or_exit(loaded)
-    start = _checkpoint(Path(run_dir), loaded, model)
-    result = profile_scene(loaded, steps, 50, model, start)
+    peer = int(scene.removeprefix("peer:")) if scene.startswith("peer:") else 0
+    loaded = None if peer else load_scene(scene, list(sets))
+    precision = "float64" if peer else loaded.scene.numerics.precision
+    ti.init(arch=ti.cpu, default_fp=ti.f64 if precision == "float64" else ti.f32, default_ip=ti.i32,
+            cpu_max_num_threads=threads, offline_cache=True, kernel_profiler=True, log_level=ti.ERROR)
+    runtime._current = ("cpu", precision, threads)  # tidem's own init would reset the profiler
+    if peer:
+        x, extent = tiled_bed(peer)
+        model = build_model(validate(bench_scene(x, extent, precision), "<bench>"))
+        result = profile_scene(None, steps, 300, model)
+    else:
+        model = build_or_exit(loaded)
+        result = profile_scene(loaded, steps, 50, model, _checkpoint(Path(run_dir), loaded, model))
     print(f"{result['scene']}: {result['particles']} particles, {steps} steps, {threads} threads, "
           f"{result['particle_steps_per_s']:.3g} particle-steps/s")
     ti.profiler.print_kernel_profiler_info("count")

@@ -64,8 +64,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's temperature plane_foil_T[s].
     `cull` (bit s: surface s does not move) lets each particle skip the static surfaces farther
     than `surface_reach` (skin plus the conduction reach) at the last neighbour build, as marked
-    in S.near by the Taichi func `mark_near(n)` (None without culling; the neighbour build runs it); a particle far from every
-    wall and tube then costs no surface evaluation at all. `grain_scale` k > 1: every particle
+    in S.near by the Taichi func `mark_near(n)` (None without culling; the neighbour build runs
+    it); a particle far from every wall and tube then costs no surface evaluation at all. `grain_scale` k > 1: every particle
     is a parcel of k^3 grains (one k per scene with heat) and conducts as those grains do
     (kernels/heat.py)."""
     pfp = heat and fluid_layer > 0.0

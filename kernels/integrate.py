@@ -24,8 +24,9 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, stamp,
     drift)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
     (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
-    drift: 0 or 1; a kernel's return value would cost the host more than reading the field). With heat, `kick` also advances temperatures
-    explicitly, T += dt q / (m c), and the heat delivered by each surface, E_s += dt q_s.
+    drift: 0 or 1; a kernel's return value would cost the host more than reading the field).
+    With heat, `kick` also advances temperatures explicitly, T += dt q / (m c), and the heat
+    delivered by each surface, E_s += dt q_s.
     `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
     (the partner pass of the contact forces, the gas forces); `kick` calls them on each particle
     first, which saves a kernel launch and a pass over the particles per step.

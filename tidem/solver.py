@@ -63,7 +63,7 @@ class Solver:
         self.steps = 0
         self.rebuilds = 0
         self._drift_done = False  # within advance(): the next step's kick-drift is done
-        self.split_passes = False  # run forces and kick as kernels of their own (`tidem bench --profile` tells them apart)
+        self.split_passes = False  # forces and kick as kernels of their own (`tidem bench --profile` tells them apart)
         self.timer = PhaseTimer()  # seconds per phase of the step (run.json's profile)
         forces = self._build_contacts()
         self.gas = None
