@@ -69,12 +69,20 @@ def permute_storage(S, order: np.ndarray) -> None:
         if name in SCRATCH:
             continue
         field = getattr(S, name)
-        values = history[name][order] if name in history else field.to_numpy()[order]
         if name == "nbr":
-            values = np.take_along_axis(np.where(listed, partners, -1), within, axis=1).astype(np.int32)
+            values = gather_rows(np.where(listed, partners, -1), np.arange(len(order)), within).astype(np.int32)
         elif name in ROW_FIELDS:
-            values = np.take_along_axis(values, within if values.ndim == 2 else within[:, :, None], axis=1)
+            values = gather_rows(history[name] if name in history else field.to_numpy(), order, within)
+        else:
+            values = (history[name] if name in history else field.to_numpy())[order]
         field.from_numpy(np.ascontiguousarray(values))
+
+
+def gather_rows(rows: np.ndarray, order: np.ndarray, within: np.ndarray) -> np.ndarray:
+    """New row r, slot s <- rows[order[r], within[r, s]] (a [capacity, K, ...] array), in one gather."""
+    n, k = within.shape
+    flat = (order[:, None] * k + within).ravel()
+    return rows.reshape(n * k, *rows.shape[2:])[flat].reshape(rows.shape)
 
 
 def hand_over(history: dict, nbr: np.ndarray, count: np.ndarray, mirror: np.ndarray, renumber: np.ndarray) -> None:
