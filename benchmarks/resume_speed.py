@@ -1,5 +1,6 @@
-"""Whole steps of a scene from a run's checkpoint, in the windows a run takes (no outputs, no
-per-phase split): the figure to compare two trees side by side.
+"""Whole steps of a scene from a run's checkpoint, in the windows a run takes (the contacts' own
+pass and the kick in one launch, unlike `tidem bench --profile`): the figure to compare two trees
+side by side.
 
     python benchmarks/resume_speed.py SCENE RUN_DIR [STEPS [THREADS]]
 
@@ -10,30 +11,21 @@ prints ms per step and particle-steps/s. For a tree other than the installed one
 """
 
 import sys
-import time
 from pathlib import Path
 
-from tidem import checkpoint
-from tidem.bench import advance
+from tidem.bench import profile_scene
 from tidem.cli import _checkpoint
 from tidem.cli_common import build_or_exit, load_scene
 from tidem.runtime import ensure_taichi
-from tidem.solver import Solver
 
 
 def main(scene: str, run_dir: str, steps: int = 2000, threads: int = 2) -> None:
     loaded = load_scene(scene, [])
     ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
     model = build_or_exit(loaded)
-    solver = Solver(model)
-    checkpoint.restore(solver, *_checkpoint(Path(run_dir), loaded, model))
-    advance(solver, 100)
-    t0 = time.perf_counter()
-    advance(solver, steps)
-    wall = time.perf_counter() - t0
-    n = int(solver.state.active.to_numpy().sum())
-    print(f"{scene}: {n} particles, {steps} steps, {threads} threads: {1e3 * wall / steps:.3f} ms per step, "
-          f"{n * steps / wall:.3g} particle-steps/s")
+    r = profile_scene(loaded, steps, 100, model, _checkpoint(Path(run_dir), loaded, model), split=False)
+    print(f"{scene}: {r['particles']} particles, {steps} steps, {threads} threads: "
+          f"{1e3 * r['wall_s'] / steps:.3f} ms per step, {r['particle_steps_per_s']:.3g} particle-steps/s")
 
 
 if __name__ == "__main__":

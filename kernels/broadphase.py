@@ -161,15 +161,21 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 S.r_build[i] = S.radius[i]
 
     @ti.func
+    def count_below(i):
+        """The entries of row i with partners j < i."""
+        below = 0
+        for k in range(S.nbr_n[i]):
+            if S.nbr[i, k] < i:
+                below += 1
+        return below
+
+    @ti.func
     def mirror_rows(n):
         for i in range(n):
-            below = 0
             for k in range(S.nbr_n[i]):
                 j = S.nbr[i, k]
                 found = -1
-                if j < i:
-                    below += 1
-                else:
+                if j > i:
                     lo = 0
                     hi = S.nbr_n[j] - 1
                     while lo <= hi:
@@ -183,17 +189,13 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         else:
                             hi = mid - 1
                 S.src[i, k] = found
-            S.split[i] = below
+            S.split[i] = count_below(i)
 
     @ti.kernel
     def count_split(n: ti.i32):
         """`split` from the rows alone (after a checkpoint restored them)."""
         for i in range(n):
-            below = 0
-            for k in range(S.nbr_n[i]):
-                if S.nbr[i, k] < i:
-                    below += 1
-            S.split[i] = below
+            S.split[i] = count_below(i)
 
     @ti.kernel
     def rebuild(n: ti.i32):

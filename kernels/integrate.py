@@ -22,7 +22,7 @@ from .geometry import make_geometry
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
                      growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None):
     """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, stamp,
-    drift)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
+    drift, kick)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
     (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
     drift: 0 or 1; a kernel's return value would cost the host more than reading the field).
     With heat, `kick` also advances temperatures explicitly, T += dt q / (m c), and the heat
@@ -32,7 +32,8 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     first, which saves a kernel launch and a pass over the particles per step.
     `forces`: a Taichi func forces(n, t, dt, stamp) (the contacts' own pass, `kernels/contact.py`);
     `forces_and_kick` runs it and then the kick in one kernel launch: one Python call and one
-    wake-up of the thread pool less per step (None without `forces`).
+    wake-up of the thread pool less per step (None without `forces`); with kick = 0 it only
+    evaluates the forces (the run's first evaluation, so that no other kernel compiles them).
 
     With `foil`, each heated-foil tube k (tube_foil[k] = (q_el, C_A, A_bin, G / ds^2), q_el > 0)
     advances its foil temperature per angle bin b with the same flows the particles received:
@@ -81,10 +82,9 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                 ti.atomic_max(S.max_disp[None], drift_particle(i, dt, 0))
 
     @ti.func
-    def kick_pass(n, t, dt, drift):
-        """The body of `kick` (a Taichi func, so that `forces_and_kick` can run it after the forces)."""
-        S.max_disp[None] = 0.0
-        # the surface loops have a few items each: serial, without a thread-pool round trip
+    def advance_surfaces(dt):
+        """Heat delivered by each surface and the heated foils over one step (a few items each: serial
+        loops, without a thread-pool round trip)."""
         if ti.static(heat):
             ti.loop_config(serialize=True)
             for s in range(n_surf):
@@ -112,27 +112,36 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                 foil_s = S.plane_foil[s]
                 if foil_s[0] > 0.0:
                     S.plane_foil_T[s] += dt / foil_s[1] * (foil_s[0] - S.surf_rate[s] / foil_s[2])
+
+    @ti.func
+    def kick_pass(n, t, dt, drift, kick):
+        """The body of `kick` (a Taichi func, so that `forces_and_kick` can run it after the forces);
+        kick = 0 only finishes the forces (`before_kick`), as the first force evaluation needs."""
+        S.max_disp[None] = 0.0
+        if kick:
+            advance_surfaces(dt)
         for i in range(n):
             if S.active[i]:
                 for finish in ti.static(before_kick):
                     finish(i, t)
-                S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]
-                S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
-                if ti.static(heat):
-                    S.T[i] += dt * S.q[i] * S.inv_heat_cap[i]
-                if drift:
-                    ti.atomic_max(S.max_disp[None], drift_particle(i, dt, drift >> 1))
+                if kick:
+                    S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]
+                    S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
+                    if ti.static(heat):
+                        S.T[i] += dt * S.q[i] * S.inv_heat_cap[i]
+                    if drift:
+                        ti.atomic_max(S.max_disp[None], drift_particle(i, dt, drift >> 1))
 
     @ti.kernel
     def kick(n: ti.i32, t: float, dt: float, drift: ti.i32):
-        kick_pass(n, t, dt, drift)
+        kick_pass(n, t, dt, drift, 1)
 
     if forces is None:
         return kick_drift, kick, None
 
     @ti.kernel
-    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, drift: ti.i32):
+    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, drift: ti.i32, kick: ti.i32):
         forces(n, t, dt, stamp)
-        kick_pass(n, t, dt, drift)
+        kick_pass(n, t, dt, drift, kick)
 
     return kick_drift, kick, forces_and_kick

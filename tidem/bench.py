@@ -137,11 +137,13 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
     return rows
 
 
-def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dict, dict] | None = None) -> dict:
+def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dict, dict] | None = None,
+                  split: bool = True) -> dict:
     """Run `warmup` steps of a loaded scene (from a checkpoint `resume`, `tidem.checkpoint.load`,
     if given), then `steps` timed steps by phase; returns {scene, particles, steps, wall_s,
-    particle_steps_per_s, profile}. The contacts' own pass and the kick run as kernels of their own,
-    so that the profile tells them apart (a run takes them in one launch). Taichi must be initialised."""
+    particle_steps_per_s, profile}. With `split` the contacts' own pass and the kick run as kernels
+    of their own, so that the profile tells them apart (a run takes them in one launch). Taichi
+    must be initialised."""
     import taichi as ti
 
     from tidem import checkpoint
@@ -153,7 +155,7 @@ def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dic
     if resume is not None:
         checkpoint.restore(solver, *resume)
     solver.timer.sync = ti.lang.impl.current_cfg().arch != ti.cpu
-    solver.split_passes = True
+    solver.split_passes = split
     advance(solver, warmup)
     ti.sync()
     solver.timer.reset()

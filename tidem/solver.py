@@ -110,7 +110,7 @@ class Solver:
         model, f = self.model, self.model.features
         self._fused = not f.reactions
         self._own_forces = hot(forces.own)
-        self._partner_forces = forces.partner if self._fused or forces.partner is None else hot(forces.partner)
+        self._partner_forces = None if self._fused or forces.partner is None else hot(forces.partner)
         finish = ()
         if self._fused:
             finish = ((forces.gather,) if f.contacts else ()) + ((self.gas.force,) if self.gas else ())
@@ -142,12 +142,16 @@ class Solver:
         self.rebuild()
         if self.gas is not None:
             self._gas_step()
-        self._own_forces(self.n, self.t, self.dt, self.steps)
-        self._finish_forces()
+        if self._fused:
+            self._forces_and_kick(self.n, self.t, self.dt, self.steps, 0, 0)  # forces only
+        else:
+            self._own_forces(self.n, self.t, self.dt, self.steps)
+            self._finish_forces()
         self.check()
 
     def _finish_forces(self) -> None:
-        """The partner pass of the contact forces and the gas forces, in kernels of their own."""
+        """The partner pass of the contact forces and the gas forces, in kernels of their own (with
+        reactions, which act between the forces and the kick)."""
         if self._partner_forces is not None:
             self._partner_forces(self.n, self.t)
         if self.gas is not None:
@@ -198,7 +202,7 @@ class Solver:
             self._gas_step()
             t = clock()
         if self._fused and not self.split_passes:  # one launch: own pass, then the kick finishes the forces
-            self._forces_and_kick(self.n, self.t, dt, self.steps, int(drift_next))
+            self._forces_and_kick(self.n, self.t, dt, self.steps, int(drift_next), 1)
             t = lap("forces and kick", t)
         else:
             self._own_forces(self.n, self.t, dt, self.steps)
