@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import taichi as ti
+import typer
 
 from tidem import runtime
 from tidem.bench import bench_scene, profile_scene, tiled_bed
@@ -46,4 +47,7 @@ def main(scene: str, run_dir: str, steps: int = 1000, threads: int = 2, sets: li
 if __name__ == "__main__":
     args = sys.argv[1:]
     numbers = [a for a in args[2:4] if a.isdigit()]
-    main(args[0], args[1], *map(int, numbers), sets=args[2 + len(numbers):])
+    try:
+        main(args[0], args[1], *map(int, numbers), sets=args[2 + len(numbers):])
+    except typer.Exit as stop:  # the scene or checkpoint was refused; the reason is printed
+        sys.exit(stop.exit_code)

@@ -13,6 +13,8 @@ prints ms per step and particle-steps/s. For a tree other than the installed one
 import sys
 from pathlib import Path
 
+import typer
+
 from tidem.bench import profile_scene
 from tidem.cli import _checkpoint
 from tidem.cli_common import build_or_exit, load_scene
@@ -29,4 +31,7 @@ def main(scene: str, run_dir: str, steps: int = 2000, threads: int = 2) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2], *map(int, sys.argv[3:5]))
+    try:
+        main(sys.argv[1], sys.argv[2], *map(int, sys.argv[3:5]))
+    except typer.Exit as stop:  # the scene or checkpoint was refused; the reason is printed
+        sys.exit(stop.exit_code)
