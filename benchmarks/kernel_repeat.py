@@ -1,0 +1,58 @@
+"""The contacts' own pass and the neighbour build, each called again and again on one fixed state
+(a scene's checkpoint): the cleanest figure for a change to one of these kernels, since neither the
+state nor the work changes between calls.
+
+    python benchmarks/kernel_repeat.py SCENE RUN_DIR [CALLS [THREADS]]
+
+RUN_DIR holds a checkpoint.npz of SCENE (e.g. `tidem scene fluidized_tube --t-end 0.3 --out RUN_DIR
+--no-render`). Takes 20 steps, then times CALLS (default 100) calls of each kernel after one untimed
+call and prints the minimum, 20th percentile and median in ms. For a tree other than the installed
+one, run it with `env PYTHONPATH=TREE python -P benchmarks/kernel_repeat.py ...` from a folder
+without a tidem tree.
+"""
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import taichi as ti
+import typer
+
+from tidem import checkpoint
+from tidem.bench import advance
+from tidem.cli import _checkpoint
+from tidem.cli_common import build_or_exit, load_scene
+from tidem.runtime import ensure_taichi
+from tidem.solver import Solver
+
+
+def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
+    loaded = load_scene(scene, [])
+    ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
+    model = build_or_exit(loaded)
+    solver = Solver(model)
+    checkpoint.restore(solver, *_checkpoint(Path(run_dir), loaded, model))
+    advance(solver, 20)
+    n, t, dt = solver.n, solver.t, solver.dt
+    kernels = {"own pass": lambda: solver._own_forces(n, t, dt, solver.steps)}
+    if solver._rebuild is not None:
+        kernels["neighbour build"] = lambda: solver._rebuild(n)
+    for name, call in kernels.items():
+        call()
+        ti.sync()
+        ms = []
+        for _ in range(calls):
+            t0 = time.perf_counter()
+            call()
+            ti.sync()
+            ms.append(1e3 * (time.perf_counter() - t0))
+        print(f"{scene} {name}: min {min(ms):.3f}, p20 {np.percentile(ms, 20):.3f}, median {np.median(ms):.3f} ms "
+              f"({calls} calls, {threads} threads)")
+
+
+if __name__ == "__main__":
+    try:
+        main(sys.argv[1], sys.argv[2], *map(int, sys.argv[3:5]))
+    except typer.Exit as stop:  # the scene or checkpoint was refused; the reason is printed
+        sys.exit(stop.exit_code)
