@@ -76,6 +76,23 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     n_surf = n_planes + n_tubes
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     cg = float(grain_scale)
+    fp = ti.lang.impl.current_cfg().default_fp
+    hist = S.ft.dtype  # float32 with numerics.precision = 'mixed' (tidem.state), else fp
+
+    @ti.func
+    def wide(v):
+        """A value read from the rows, in the kernels' float type."""
+        return ti.cast(v, fp)
+
+    @ti.func
+    def handed(v):
+        """v rounded to the rows' float type, as the partner will read it (float32 with
+        numerics.precision = 'mixed'): both partners then add the very same force, moment and heat
+        flow, so that momentum and heat stay conserved to the float64 sums' rounding."""
+        out = v
+        if ti.static(hist != fp):
+            out = ti.cast(v, hist)
+        return out
 
     @ti.func
     def lens(p, r_eff, gap, delta_f):
@@ -241,40 +258,44 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                                 i_roll = ai * aj / (ai + aj)
                             dmax = 0.0
                             if ti.static(hysteretic):
-                                dmax = S.dmax[i, k]
+                                dmax = wide(S.dmax[i, k])
                             mr = zero3
                             if ti.static(rolling):
-                                mr = S.mr[i, k]
+                                mr = wide(S.mr[i, k])
                             f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
                                 nrm, delta, v_rel, wi - S.w[j], m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
-                                pair_params(mat_i, j, p_same), S.ft[i, k], mr, dmax, dt)
+                                pair_params(mat_i, j, p_same), wide(S.ft[i, k]), mr, dmax, dt)
+                            f = handed(f)
+                            m_roll = handed(m_roll)
                             force += f
+                            if ti.static(hist != fp):  # the force j receives: both spins from one value
+                                f_t = f
                             torque += (ri * nrm).cross(f_t) + m_roll
-                            S.ft[i, k] = xi_new
+                            S.ft[i, k] = ti.cast(xi_new, hist)
                             if mirror >= 0:  # handed to j: the force on i, and the pair touches now
-                                S.ft[j, mirror] = f
+                                S.ft[j, mirror] = ti.cast(f, hist)
                                 S.src[j, mirror] = stamp
                                 if ti.static(rolling):
-                                    S.mr[j, mirror] = m_roll
+                                    S.mr[j, mirror] = ti.cast(m_roll, hist)
                             if ti.static(heat):
-                                flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj)
+                                flow = handed(touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj))
                                 heat_in += flow
                                 if mirror >= 0:
-                                    S.qpair[j, mirror] = -flow
+                                    S.qpair[j, mirror] = ti.cast(-flow, hist)
                             if ti.static(rolling):
-                                S.mr[i, k] = mr_new
+                                S.mr[i, k] = ti.cast(mr_new, hist)
                             if ti.static(hysteretic):
-                                S.dmax[i, k] = dmax_new
+                                S.dmax[i, k] = ti.cast(dmax_new, hist)
                             worst = ti.max(worst, delta / ti.min(ri, rj))
                             touching += 1
                         else:
                             if ti.static(heat):
                                 flow = 0.0
                                 if ti.static(pfp):
-                                    flow = lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
+                                    flow = handed(lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2))
                                 heat_in += flow
                                 if mirror >= 0:
-                                    S.qpair[j, mirror] = -flow
+                                    S.qpair[j, mirror] = ti.cast(-flow, hist)
                             S.ft[i, k] = zero3
                             if ti.static(rolling):
                                 S.mr[i, k] = zero3

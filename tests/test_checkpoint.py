@@ -72,10 +72,10 @@ def uninterrupted(tmp_path_factory):
     return out
 
 
-def resume(out, t_end=T_END):
-    loaded = validate(hot_pour(t_end))
+def resume(out, t_end=T_END, **numerics):
+    loaded = validate(hot_pour(t_end, **numerics))
     meta, arrays = checkpoint.load(out)
-    checkpoint.check_scene(meta, loaded.raw, "float64")
+    checkpoint.check_scene(meta, loaded.raw, numerics.get("precision", "float64"))
     return run(build_model(loaded), out, progress=False, resume=(meta, arrays))
 
 
@@ -85,6 +85,16 @@ def test_run_to_half_then_resume_is_bit_identical(uninterrupted, tmp_path):
     second = resume(tmp_path)
     assert second.status == "finished" and second.summary["resumed_from"].startswith("t = 0.03")
     assert_same_run(uninterrupted, tmp_path)
+
+
+def test_mixed_precision_resume_is_bit_identical(tmp_path):
+    """numerics.precision = 'mixed' keeps the rows' history in float32: the checkpoint stores them
+    as they are, and the resumed run is the uninterrupted one bit for bit."""
+    whole, half = tmp_path / "whole", tmp_path / "half"
+    assert run(build_model(validate(hot_pour(precision="mixed"))), whole, progress=False).status == "finished"
+    assert run(build_model(validate(hot_pour(T_END / 2, precision="mixed"))), half, progress=False).status == "finished"
+    assert resume(half, precision="mixed").status == "finished"
+    assert_same_run(whole, half)
 
 
 def test_sigterm_checkpoints_at_a_step_boundary_and_resume_is_bit_identical(uninterrupted, tmp_path, monkeypatch):

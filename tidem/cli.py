@@ -314,7 +314,8 @@ def _passage_notes(scene, prefix: str, err: bool = True) -> None:
 def bench(
     sizes: Annotated[Optional[str], typer.Option(help="Comma-separated particle counts "
                                                  "(default 10000,50000,200000; with --render 2000,20000)")] = None,
-    precision: Annotated[str, typer.Option(help="float32, float64 or both")] = "both",
+    precision: Annotated[str, typer.Option(help="float32, float64, mixed (float32 contact history), both "
+                                                "(float32 and float64) or all")] = "both",
     steps: Annotated[int, typer.Option(help="Timed steps per case (scaled down for large N)")] = 2000,
     threads: Annotated[int, typer.Option(help="CPU threads (with --render: llvmpipe threads)")] = 2,
     out: Annotated[Optional[Path], typer.Option(help="Write results as JSON here")] = None,
@@ -349,11 +350,12 @@ def bench(
         return
     from tidem.bench import run_matrix
 
-    if precision not in ("float32", "float64", "both"):
-        fail(f"--precision {precision}: choose float32, float64 or both", 2)
+    choices = {"both": ["float32", "float64"], "all": ["float32", "mixed", "float64"]}
+    if precision not in ("float32", "float64", "mixed", *choices):
+        fail(f"--precision {precision}: choose float32, float64, mixed, both or all", 2)
     if bed is not None and not bed.exists():
         fail(f"--bed {bed}: no such file", 2)
-    run_matrix(counts, ["float32", "float64"] if precision == "both" else [precision], steps, threads, out, bed)
+    run_matrix(counts, choices.get(precision, [precision]), steps, threads, out, bed)
 
 
 def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, threads: int, out: Optional[Path],

@@ -36,6 +36,17 @@ class Features:
     coarse_grain: bool = False  # parcels standing for k^3 grains (particles[i].coarse_grain > 1)
 
     @property
+    def float_bytes(self) -> int:
+        """Bytes of a float in the fields and kernels: 8, or 4 with numerics.precision = 'float32'."""
+        return 4 if self.precision == "float32" else 8
+
+    @property
+    def history_bytes(self) -> int:
+        """Bytes of a float in the Verlet rows' contact history and hand-over (springs, maximum
+        overlap, the force and heat flow handed to the partner): 4 with 'float32' and 'mixed'."""
+        return 8 if self.precision == "float64" else 4
+
+    @property
     def contacts(self) -> bool:
         """False for contact.model = 'none': no neighbour search and no contact forces."""
         return self.law != cl.NONE

@@ -80,7 +80,7 @@ def peak_resident_bytes() -> int:
 def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
     """Bytes of the Taichi fields per particle (`tidem.state.State`) other than the neighbour
     and contact-history rows; `feat` has the attributes of `tidem.model.Features` used here."""
-    fp = 8 if feat.precision == "float64" else 4
+    fp = feat.float_bytes
     per = fp * (3 * 8 + 6) + 4 * 9  # vectors x v w f tq x_build xf + scalars; ints
     per += wall_slots * (4 + 3 * fp)
     if feat.rolling:
@@ -98,7 +98,7 @@ def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
 
 def neighbor_bytes(feat, neighbors: int) -> int:
     """Bytes per particle of the neighbour list and its contact history (springs, heat rows)."""
-    fp = 8 if feat.precision == "float64" else 4
+    fp = feat.history_bytes
     per = neighbors * (4 * 3 + 3 * fp)  # nbr, nbr_new, src, ft
     if feat.rolling:
         per += 3 * fp * neighbors
@@ -111,7 +111,7 @@ def neighbor_bytes(feat, neighbors: int) -> int:
 
 def gas_cell_bytes(feat) -> int:
     """Bytes of the gas grid's Taichi fields per cell (`tidem.gas`)."""
-    fp = 8 if feat.precision == "float64" else 4
+    fp = feat.float_bytes
     return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species) + 4 * 4
 
 

@@ -94,7 +94,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
         return arch
     if _current is not None:
         ti.reset()
-    fp = ti.f64 if precision == "float64" else ti.f32
+    fp = ti.f32 if precision == "float32" else ti.f64  # 'mixed' stores only the contact history in float32
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
         ti.init(

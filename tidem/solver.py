@@ -68,7 +68,7 @@ class Solver:
         forces = self._build_contacts()
         self.gas = None
         if f.gas:
-            self.gas = GasPhase(model, self.state, ti.f64 if f.precision == "float64" else ti.f32, self.timer)
+            self.gas = GasPhase(model, self.state, ti.f32 if f.precision == "float32" else ti.f64, self.timer)
         self._build_integrators(forces)
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, self.state)

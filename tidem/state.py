@@ -19,7 +19,9 @@ Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), 
 spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
 In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) ft holds
 the force on the owner [N] and src the step of the last force pass that found the pair
-touching (stamp[None], the current pass's step), both written by the owner.
+touching (stamp[None], the current pass's step), both written by the owner. With
+numerics.precision = 'mixed' the float rows (ft, mr, dmax, qpair) are float32, every other
+field float64.
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
 [capacity, K] (heat rate into the particle from that neighbour, written by the lower-index
 particle of the pair, read by the higher one; see kernels/contact.py); per
@@ -137,14 +139,15 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.per_particle((N,), "touch_end")
     for name in ("nbr", "nbr_new", "src"):
         p.per_particle((N, K), name, ti.i32)
-    p.per_particle((N, K), "ft", n=3)
+    hist = ti.f32 if feat.history_bytes == 4 else ti.f64  # numerics.precision = 'mixed': float32 rows
+    p.per_particle((N, K), "ft", hist, n=3)
     p.per_particle((N, W), "wid", ti.i32)
     p.per_particle((N, W), "wft", n=3)
     if feat.rolling:
-        p.per_particle((N, K), "mr", n=3)
+        p.per_particle((N, K), "mr", hist, n=3)
         p.per_particle((N, W), "wmr", n=3)
     if feat.hysteretic:
-        p.per_particle((N, K), "dmax")
+        p.per_particle((N, K), "dmax", hist)
         p.per_particle((N, W), "wdmax")
     nc = model.grid.n_cells
     for name in ("cell_count", "cell_start", "cell_fill"):
@@ -172,7 +175,7 @@ def _place_heat_fields(p: _Placer, model: Model) -> None:
     for name in ("T", "q", "inv_heat_cap"):
         p.per_particle((N,), name)
     if feat.contacts:
-        p.per_particle((N, K), "qpair")
+        p.per_particle((N, K), "qpair", ti.f32 if feat.history_bytes == 4 else ti.f64)
     NS = max(len(model.planes) + len(model.tubes), 1)
     p.place((NS,), "surf_T")
     p.place((NS,), "surf_rate")
@@ -228,7 +231,7 @@ def _place_averaging_fields(p: _Placer, model: Model) -> None:
 
 def allocate(model: Model) -> State:
     """Allocate every field the model's features need and fill it from the Model."""
-    fp = ti.f64 if model.features.precision == "float64" else ti.f32
+    fp = ti.f32 if model.features.precision == "float32" else ti.f64
     feat = model.features
     S = State()
     p = _Placer(S, fp)

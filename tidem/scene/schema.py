@@ -223,7 +223,7 @@ class Numerics(Strict):
     dt_fraction: Number = Field(default=0.2, gt=0, le=1.0)
     force_dt: bool = False
     impact_velocity: Positive | None = None
-    precision: Literal["float32", "float64"] = "float64"
+    precision: Literal["float32", "float64", "mixed"] = "float64"
     skin: Number = Field(default=0.1, ge=0.0, le=2.0)
     max_neighbors: int | None = Field(default=None, ge=4, le=512)
     max_wall_contacts: int = Field(default=4, ge=1, le=32)
