@@ -21,6 +21,11 @@ every partner j < i. The overlap check and the contact count are computed in bot
 each for its own side of the row. Against the full list evaluated twice (one law per listed pair
 and side) this makes the force step 1.3x faster on the peer benchmark bed.
 
+With numerics.precision = 'mixed' the row fields (ft, mr, dmax, qpair) are float32: what the loop
+reads from them is widened to float64 (`wide`), and the force, rolling moment and heat flow handed
+to the partner are rounded to float32 once (`handed`) and used by both partners (the owner's torque
+then takes the handed force), so momentum and heat are still conserved to the float64 sums' rounding.
+
 Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is
 a plane with a velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Wall and tube contacts
 keep their history in a few slots per particle keyed by the surface index (`wmask` has bit s
