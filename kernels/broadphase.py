@@ -14,7 +14,8 @@ Algorithm (O(N) per rebuild):
    descending order, then entries moving left in ascending order, then new slots are zeroed.
 
 4. for every entry (i, k) with partner j > i, find the slot of i in j's row (the count of j's
-   partners below i, the row being sorted) and keep it in `src[i, k]` (the mirror slot; -1 otherwise). The contact kernel evaluates a
+   partners below i, the row being sorted) and keep it in `src[i, k]` (the mirror slot; -1
+   otherwise). The contact kernel evaluates a
    pair once, in the lower index's row, and hands the force to the partner through it
    (`kernels/contact.py`); `src` is scratch of step 3 until then. For partners j < i it is -1,
    and each force pass stamps it with its step while the pair touches (`kernels/contact.py`).

@@ -350,12 +350,13 @@ def bench(
         return
     from tidem.bench import run_matrix
 
-    choices = {"both": ["float32", "float64"], "all": ["float32", "mixed", "float64"]}
-    if precision not in ("float32", "float64", "mixed", *choices):
+    runs = {"float32": ["float32"], "float64": ["float64"], "mixed": ["mixed"], "both": ["float32", "float64"],
+            "all": ["float32", "mixed", "float64"]}
+    if precision not in runs:
         fail(f"--precision {precision}: choose float32, float64, mixed, both or all", 2)
     if bed is not None and not bed.exists():
         fail(f"--bed {bed}: no such file", 2)
-    run_matrix(counts, choices.get(precision, [precision]), steps, threads, out, bed)
+    run_matrix(counts, runs[precision], steps, threads, out, bed)
 
 
 def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, threads: int, out: Optional[Path],

@@ -92,6 +92,12 @@ def wall_foil_vector(plane: dict, model: Model) -> list[float]:
     return [plane["flux"], plane["foil_C"], area]
 
 
+def history_dtype(feat):
+    """The float type of the Verlet rows' contact history and hand-over (ft, mr, dmax, qpair):
+    float32 with numerics.precision = 'mixed' (and 'float32'), else float64."""
+    return ti.f32 if feat.history_bytes == 4 else ti.f64
+
+
 class _Placer:
     """Places fields of one SNode tree on a State and keeps the names of those indexed by
     particle first (`S.particle_fields`, permuted by a storage sort)."""
@@ -139,7 +145,7 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.per_particle((N,), "touch_end")
     for name in ("nbr", "nbr_new", "src"):
         p.per_particle((N, K), name, ti.i32)
-    hist = ti.f32 if feat.history_bytes == 4 else ti.f64  # numerics.precision = 'mixed': float32 rows
+    hist = history_dtype(feat)
     p.per_particle((N, K), "ft", hist, n=3)
     p.per_particle((N, W), "wid", ti.i32)
     p.per_particle((N, W), "wft", n=3)
@@ -175,7 +181,7 @@ def _place_heat_fields(p: _Placer, model: Model) -> None:
     for name in ("T", "q", "inv_heat_cap"):
         p.per_particle((N,), name)
     if feat.contacts:
-        p.per_particle((N, K), "qpair", ti.f32 if feat.history_bytes == 4 else ti.f64)
+        p.per_particle((N, K), "qpair", history_dtype(feat))
     NS = max(len(model.planes) + len(model.tubes), 1)
     p.place((NS,), "surf_T")
     p.place((NS,), "surf_rate")
