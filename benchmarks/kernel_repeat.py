@@ -1,5 +1,6 @@
-"""The contacts' own pass and the neighbour build, each called again and again on one fixed state
-(a scene's checkpoint): the cleanest figure for a change to one of these kernels, since neither the
+"""The contacts' own pass (in a scene with heat also without the conduction, as between two
+evaluations of it) and the neighbour build, each called again and again on one fixed state (a
+scene's checkpoint): the cleanest figure for a change to one of these kernels, since neither the
 state nor the work changes between calls.
 
     python benchmarks/kernel_repeat.py SCENE RUN_DIR [CALLS [THREADS]]
@@ -35,7 +36,9 @@ def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
     checkpoint.restore(solver, *_checkpoint(Path(run_dir), loaded, model))
     advance(solver, 20)
     n, t, dt = solver.n, solver.t, solver.dt
-    kernels = {"own pass": lambda: solver._own_forces(n, t, dt, solver.steps)}
+    kernels = {"own pass": lambda: solver._own_forces(n, t, dt, solver.steps, 1)}
+    if model.features.heat:  # a step between two evaluations of the conduction (heat.conduction_interval)
+        kernels["own pass without conduction"] = lambda: solver._own_forces(n, t, dt, solver.steps, 0)
     if solver._rebuild is not None:
         kernels["neighbour build"] = lambda: solver._rebuild(n)
     for name, call in kernels.items():

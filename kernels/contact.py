@@ -51,28 +51,31 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
                       surface_reach: float = 0.0, grain_scale: float = 1.0):
-    """Return a namespace of the two passes: kernels `own(n, t, dt, stamp)` and `partner(n, t)` (None
-    without pairs); and as Taichi funcs, for kernels that fuse them with the rest of the step
-    (`kernels/integrate.py`), `own_pass(n, t, dt, stamp)`, the body of `own`, and `gather(i, t)`, the
-    partner pass for one particle. `single_material` loads the pair parameters once per
-    particle; `heat` adds conduction (kernels/heat.py) to the same loop, writing q[i] [W] and
-    the heat flow into each surface with a temperature, surf_rate[s] [W] (into the bed > 0), and
-    with `angle_bins` the heat flow from each tube by angle omega of the contact point from the
-    top of the tube, tube_bin_rate[k, b] (omega = atan2(side, up), 0 = top, 180 deg = bottom).
-    `fluid_layer` > 0 adds particle-fluid-particle conduction between neighbours closer than
-    fluid_layer * min(r_i, r_j), touching or not, and between a surface with a temperature and
-    a particle within fluid_layer * r_i of it that does not touch it (R* = r_i; a touching one
-    conducts by Schluender's coefficient instead). `pairs = False` (contact.model = 'none') skips the
-    neighbour list: gravity and walls only. `radiation` adds grey radiation from a heated surface
-    to the particles touching it; with `foil`, a tube with tube_foil[k][0] > 0 (a heat flux) has
-    the temperature of its foil in the angle bin of the contact point, tube_bin_T[k, b]; with
-    `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's temperature plane_foil_T[s].
-    `cull` (bit s: surface s does not move) lets each particle skip the static surfaces farther
-    than `surface_reach` (skin plus the conduction reach) at the last neighbour build, as marked
-    in S.near by the Taichi func `mark_near(n)` (None without culling; the neighbour build runs
-    it); a particle far from every wall and tube then costs no surface evaluation at all. `grain_scale` k > 1: every particle
-    is a parcel of k^3 grains (one k per scene with heat) and conducts as those grains do
-    (kernels/heat.py)."""
+    """Return a namespace of the two passes: kernels `own(n, t, dt, stamp, conduct)` and `partner(n, t)`
+    (None without pairs); and as Taichi funcs, for kernels that fuse them with the rest of the step
+    (`kernels/integrate.py`), `own_pass(n, t, dt, stamp, conduct)`, the body of `own`, and
+    `gather(i, t)`, the partner pass for one particle. With heat, `conduct` = m > 0 evaluates the conduction and
+    books the heat of m steps (q[i] = m x the heat flow: heat.conduction_interval = m evaluates it every
+    m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] = 0; the surfaces' heat
+    flows of the last evaluation hold); S.conduct[None] tells the partner pass and the kick.
+    `single_material` loads the pair parameters once per particle; `heat` adds conduction
+    (kernels/heat.py) to the same loop, writing q[i] [W] and the heat flow into each surface with a
+    temperature, surf_rate[s] [W] (into the bed > 0), and with `angle_bins` the heat flow from each tube
+    by angle omega of the contact point from the top of the tube, tube_bin_rate[k, b] (omega =
+    atan2(side, up), 0 = top, 180 deg = bottom). `fluid_layer` > 0 adds particle-fluid-particle
+    conduction between neighbours closer than fluid_layer * min(r_i, r_j), touching or not, and between
+    a surface with a temperature and a particle within fluid_layer * r_i of it that does not touch it
+    (R* = r_i; a touching one conducts by Schluender's coefficient instead). `pairs = False`
+    (contact.model = 'none') skips the neighbour list: gravity and walls only. `radiation` adds grey
+    radiation from a heated surface to the particles touching it; with `foil`, a tube with
+    tube_foil[k][0] > 0 (a heat flux) has the temperature of its foil in the angle bin of the contact
+    point, tube_bin_T[k, b]; with `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's
+    temperature plane_foil_T[s]. `cull` (bit s: surface s does not move) lets each particle skip the
+    static surfaces farther than `surface_reach` (skin plus the conduction reach) at the last neighbour
+    build, as marked in S.near by the Taichi func `mark_near(n)` (None without culling; the neighbour
+    build runs it); a particle far from every wall and tube then costs no surface evaluation at all.
+    `grain_scale` k > 1: every particle is a parcel of k^3 grains (one k per scene with heat) and
+    conducts as those grains do (kernels/heat.py)."""
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
@@ -217,17 +220,19 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.func
-    def own_pass(n, t, dt, stamp):
+    def own_pass(n, t, dt, stamp, conduct):
         """The body of `own_forces`: a Taichi func, so that a kernel can run it and the kick in one launch
         (`kernels/integrate.py`)."""
         if ti.static(heat):
-            ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
-            for s in range(n_surf):
-                S.surf_rate[s] = 0.0
-        if ti.static(angle_bins > 0):
-            ti.loop_config(serialize=True)
-            for k, b in ti.ndrange(*S.tube_bin_rate.shape):
-                S.tube_bin_rate[k, b] = 0.0
+            S.conduct[None] = conduct  # for the partner pass and the kick
+            if conduct:  # else the surfaces' heat flows of the last evaluation hold
+                ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
+                for s in range(n_surf):
+                    S.surf_rate[s] = 0.0
+                if ti.static(angle_bins > 0):
+                    ti.loop_config(serialize=True)
+                    for k, b in ti.ndrange(*S.tube_bin_rate.shape):
+                        S.tube_bin_rate[k, b] = 0.0
         S.stamp[None] = stamp  # for the partner pass
         for i in range(n):
             if S.active[i]:
@@ -283,10 +288,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                                 if ti.static(rolling):
                                     S.mr[j, mirror] = ti.cast(m_roll, hist)
                             if ti.static(heat):
-                                flow = handed(touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj))
-                                heat_in += flow
-                                if mirror >= 0:
-                                    S.qpair[j, mirror] = ti.cast(-flow, hist)
+                                if conduct:
+                                    flow = handed(touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj))
+                                    heat_in += flow
+                                    if mirror >= 0:
+                                        S.qpair[j, mirror] = ti.cast(-flow, hist)
                             if ti.static(rolling):
                                 S.mr[i, k] = ti.cast(mr_new, hist)
                             if ti.static(hysteretic):
@@ -295,12 +301,13 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             touching += 1
                         else:
                             if ti.static(heat):
-                                flow = 0.0
-                                if ti.static(pfp):
-                                    flow = handed(lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2))
-                                heat_in += flow
-                                if mirror >= 0:
-                                    S.qpair[j, mirror] = ti.cast(-flow, hist)
+                                if conduct:
+                                    flow = 0.0
+                                    if ti.static(pfp):
+                                        flow = handed(lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2))
+                                    heat_in += flow
+                                    if mirror >= 0:
+                                        S.qpair[j, mirror] = ti.cast(-flow, hist)
                             S.ft[i, k] = zero3
                             if ti.static(rolling):
                                 S.mr[i, k] = zero3
@@ -348,7 +355,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                                 torque += (ri * nrm).cross(f_t) + m_roll
                                 S.wft[i, slot] = xi_new
                                 if ti.static(heat):
-                                    if S.surf_T[s] > 0.0:
+                                    if conduct and S.surf_T[s] > 0.0:
                                         b = tube_bin(s, nrm)
                                         t_wall = wall_temperature(s, b)
                                         flow = wall_conductance(S.ps[mat_i, s], ri, delta, cg) * (t_wall - S.T[i])
@@ -367,7 +374,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                                 S.wid[i, slot] = -1
                                 held &= ~(1 << s)
                             if ti.static(pfp):
-                                if -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
+                                if conduct and -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
                                     b = tube_bin(s, nrm)
                                     flow = cg * lens(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
                                         wall_temperature(s, b) - S.T[i])
@@ -377,15 +384,15 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 S.f[i] = force
                 S.tq[i] = torque
                 if ti.static(heat):
-                    S.q[i] = heat_in
+                    S.q[i] = conduct * heat_in  # the heat of `conduct` steps, and none between evaluations
                 S.ovl[i] = worst
                 S.ncontact[i] = touching
                 if ti.static(not pairs):
                     note_contact_time(i, touching, t)
 
     @ti.kernel
-    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32):
-        own_pass(n, t, dt, stamp)
+    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32, conduct: ti.i32):
+        own_pass(n, t, dt, stamp, conduct)
 
     @ti.func
     def mark_near_surfaces(n):
@@ -413,11 +420,15 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         worst = S.ovl[i]
         touching = S.ncontact[i]
         stamp = S.stamp[None]
+        conduct = 0
+        if ti.static(heat):
+            conduct = S.conduct[None]
         if ti.static(pairs):
             for k in range(S.split[i]):  # the partners j < i (the row is sorted; the rest was done in own_forces)
                 j = S.nbr[i, k]
                 if ti.static(heat):
-                    heat_in += S.qpair[i, k]  # written by j in own_forces
+                    if conduct:
+                        heat_in += S.qpair[i, k]  # written by j in own_forces
                 if S.src[i, k] == stamp:  # j found the pair touching in this force pass
                     d, rj, rsum, dist2 = separation(xi, ri, j, S.xf)
                     nrm, dist = unit_normal(d, dist2, rsum)
@@ -432,7 +443,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             S.f[i] += force
             S.tq[i] += torque
             if ti.static(heat):
-                S.q[i] += heat_in
+                S.q[i] += conduct * heat_in
             S.ovl[i] = worst
             S.ncontact[i] = touching
             note_contact_time(i, touching, t)

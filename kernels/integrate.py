@@ -22,7 +22,7 @@ from .geometry import make_geometry
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
                      growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None):
     """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, stamp,
-    drift, kick)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
+    conduct, drift, kick)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
     (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
     drift: 0 or 1; a kernel's return value would cost the host more than reading the field).
     With heat, `kick` also advances temperatures explicitly, T += dt q / (m c), and the heat
@@ -30,7 +30,7 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
     (the partner pass of the contact forces, the gas forces); `kick` calls them on each particle
     first, which saves a kernel launch and a pass over the particles per step.
-    `forces`: a Taichi func forces(n, t, dt, stamp) (the contacts' own pass, `kernels/contact.py`);
+    `forces`: a Taichi func forces(n, t, dt, stamp, conduct) (the contacts' own pass, `kernels/contact.py`);
     `forces_and_kick` runs it and then the kick in one kernel launch: one Python call and one
     wake-up of the thread pool less per step (None without `forces`); with kick = 0 it only
     evaluates the forces (the run's first evaluation, so that no other kernel compiles them).
@@ -43,7 +43,10 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     inner side is adiabatic (source 3's foil on a polyethylene tube). Heat is conserved
     exactly: q_el A t = bed heat + foil heat. tube_bin_Tsum integrates T_b over time. With
     `wall_foil` a heated-foil plane s (plane_foil[s] = (q_el, C_A, A)) has one foil temperature,
-    C_A dT/dt = q_el - Q_s / A, Q_s its heat into the bed."""
+    C_A dT/dt = q_el - Q_s / A, Q_s its heat into the bed. With heat.conduction_interval m the flows are
+    evaluated every m-th step (`kernels/contact.py`): the particles then receive m steps of heat at
+    once, the surfaces' delivered heat E_s grows by m dt q_s, and the foils take the held Q each step,
+    so the energies agree after every m steps."""
     min_image, wrap, _cc, _cid = make_geometry(grid)
 
     fp = ti.lang.impl.current_cfg().default_fp
@@ -85,14 +88,16 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     def advance_surfaces(dt):
         """Heat delivered by each surface and the heated foils over one step (a few items each: serial
         loops, without a thread-pool round trip)."""
+        booked = dt  # the time over which the particles receive the surfaces' heat flows this step
         if ti.static(heat):
+            booked = dt * S.conduct[None]  # m dt at an evaluation of the conduction, 0 between
             ti.loop_config(serialize=True)
             for s in range(n_surf):
-                S.surf_energy[s] += dt * S.surf_rate[s]
+                S.surf_energy[s] += booked * S.surf_rate[s]
         if ti.static(angle_bins > 0):
             ti.loop_config(serialize=True)
             for k, b in ti.ndrange(*S.tube_bin_rate.shape):
-                S.tube_bin_energy[k, b] += dt * S.tube_bin_rate[k, b]
+                S.tube_bin_energy[k, b] += booked * S.tube_bin_rate[k, b]
         if ti.static(foil):
             ti.loop_config(serialize=True)
             for k, b in ti.ndrange(*S.tube_bin_T.shape):
@@ -140,8 +145,8 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         return kick_drift, kick, None
 
     @ti.kernel
-    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, drift: ti.i32, kick: ti.i32):
-        forces(n, t, dt, stamp)
+    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, conduct: ti.i32, drift: ti.i32, kick: ti.i32):
+        forces(n, t, dt, stamp, conduct)
         kick_pass(n, t, dt, drift, kick)
 
     return kick_drift, kick, forces_and_kick

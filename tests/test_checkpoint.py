@@ -24,7 +24,7 @@ SAND = {"density": 2600.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitu
 T_END = 0.06
 
 
-def hot_pour(t_end=T_END, **numerics):
+def hot_pour(t_end=T_END, conduction_interval=1, **numerics):
     """Particles poured (random places, seeded) onto a heated floor with a tube: pour RNG,
     tangential and rolling springs, wall and tube slots, temperatures and the time-averaged
     cells and ring sectors all carry state."""
@@ -39,7 +39,7 @@ def hot_pour(t_end=T_END, **numerics):
                     "diameter": {"distribution": "mono", "value": 0.002}, "temperature": 400.0,
                     "pour": {"region": {"min": [0, 0, 0.02], "max": [0.016, 0.008, 0.03]}, "rate": 2000.0}}],
         tubes=[{"center": [0.008, 0.0, 0.012], "axis": "y", "diameter": 0.004, "temperature": 350.0}],
-        heat={"initial_temperature": 300.0},
+        heat={"initial_temperature": 300.0, "conduction_interval": conduction_interval},
         averaging={"start": 0.01, "interval": 0.002, "cell_size": [0.004, 0.005], "rings": 2},
         numerics={"t_end": t_end, "dt_fraction": 0.3, **numerics},
         output={"interval": 0.01, "timeseries_interval": 0.002},
@@ -72,8 +72,8 @@ def uninterrupted(tmp_path_factory):
     return out
 
 
-def resume(out, t_end=T_END, **numerics):
-    loaded = validate(hot_pour(t_end, **numerics))
+def resume(out, t_end=T_END, conduction_interval=1, **numerics):
+    loaded = validate(hot_pour(t_end, conduction_interval, **numerics))
     meta, arrays = checkpoint.load(out)
     checkpoint.check_scene(meta, loaded.raw, numerics.get("precision", "float64"))
     return run(build_model(loaded), out, progress=False, resume=(meta, arrays))
@@ -94,6 +94,18 @@ def test_mixed_precision_resume_is_bit_identical(tmp_path):
     assert run(build_model(validate(hot_pour(precision="mixed"))), whole, progress=False).status == "finished"
     assert run(build_model(validate(hot_pour(T_END / 2, precision="mixed"))), half, progress=False).status == "finished"
     assert resume(half, precision="mixed").status == "finished"
+    assert_same_run(whole, half)
+
+
+def test_conduction_every_few_steps_resumes_bit_identical(tmp_path):
+    """With heat.conduction_interval = 5 the surfaces' heat flows hold between evaluations: the
+    checkpoint (here between two evaluations) carries them, and the resumed run is the
+    uninterrupted one bit for bit."""
+    whole, half = tmp_path / "whole", tmp_path / "half"
+    assert run(build_model(validate(hot_pour(conduction_interval=5))), whole, progress=False).status == "finished"
+    first = run(build_model(validate(hot_pour(T_END / 2, conduction_interval=5))), half, progress=False)
+    assert first.status == "finished" and first.steps % 5 != 0, "the checkpoint falls between two evaluations"
+    assert resume(half, conduction_interval=5).status == "finished"
     assert_same_run(whole, half)
 
 

@@ -29,7 +29,7 @@ FORMAT = 1
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # Rewritten by every force pass (the positions the partner pass reads, kernels/contact.py): not kept.
-TRANSIENT = ("xf", "stamp", "split")  # rewritten before use (split: by `restore`, from the rows)
+TRANSIENT = ("xf", "stamp", "split", "conduct")  # rewritten before use (split: by `restore`, from the rows)
 
 
 class CheckpointError(RuntimeError):

@@ -290,6 +290,8 @@ def check(
         f"Rayleigh time {sc.rayleigh:.4g} s, contact time {sc.contact:.4g} s, stability limit {sc.limit:.4g} s"
         + (" (does not bind: every particle is fixed)" if model.fixed.all() else ""),
         f"time step: {model.dt:.4g} s ({model.t_end / model.dt:.3g} steps to t_end = {model.t_end:g} s)",
+        *([f"conduction: every {loaded.scene.heat.conduction_interval} step(s); explicit limit {model.thermal_limit:.4g} s "
+           f"(heat.conduction_interval up to {int(model.thermal_limit / model.dt)})"] if model.thermal_limit else []),
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
         f"kernels: {', '.join(f.kernels())}",

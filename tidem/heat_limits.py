@@ -86,6 +86,14 @@ def heat_step_errors(scene, material, radius, heat_cap, max_neighbors, surfaces,
                       "gas_mean_free_path + roughness > 0 (got 0); set roughness (e.g. 1e-6) or fluid_layer = 0"]
     limit = (thermal_limit(scene, mats, mat_names, material, radius, heat_cap, max_neighbors, surfaces, grain_scale)
              if contacts else None)
+    every = scene.heat.conduction_interval
+    if contacts and every > 1 and every * dt > limit:
+        fix = (f"lower heat.conduction_interval to {int(limit / dt)} or less" if limit >= dt
+               else "set heat.conduction_interval = 1 and lower the time step")
+        return limit, [
+            f"heat.conduction_interval: the conduction is evaluated every {every} steps, an explicit step of "
+            f"{every * dt:.3g} s, above the conduction limit {limit:.3g} s (min over particles of m c / sum of "
+            f"contact conductances); {fix}"]
     if contacts and dt > limit:
         return limit, [
             f"heat: the time step {dt:.3g} s exceeds the explicit conduction limit {limit:.3g} s "

@@ -4,7 +4,8 @@
 neighbour rebuild when a particle moved more than half the skin (or particles appeared),
 every `numerics.sort_interval` rebuilds first a re-sort of particle storage into cell order
 (`tidem.storage_order`), a gas step every `gas.coupling_interval` steps (scenes with gas),
-forces (contacts, then drag and pressure-gradient force), reactions (with a rebuild when a
+forces (contacts, with the conduction every `heat.conduction_interval` steps, then drag and
+pressure-gradient force), reactions (with a rebuild when a
 particle burnt out or left), kick. Without reactions the kick kernel itself finishes the
 forces (the contacts' partner pass and the gas forces), the contacts' own pass and the kick
 are one kernel launch (`forces_and_kick`), and `advance(k)`, which the run loop calls between
@@ -79,6 +80,8 @@ class Solver:
             self._average = make_averaging_kernel(model.grid, a.lo, a.cells, a.size, f.n_tubes, a.rings, a.ring_width,
                                                   a.sectors, f.heat, self.state)
         self._check_every = model.scene.numerics.check_interval
+        heat = model.scene.heat
+        self._conduct_every = heat.conduction_interval if heat is not None else 1  # steps per conduction evaluation
         # scenes whose outputs follow particles by storage index (pours, reactions, contact timing) keep their
         # order, and so do small ones, which fit in cache whatever their order
         sortable = f.contacts and self.n >= SORT_MIN_PARTICLES and not (model.pours or f.reactions or f.contact_time)
@@ -143,9 +146,9 @@ class Solver:
         if self.gas is not None:
             self._gas_step()
         if self._fused:
-            self._forces_and_kick(self.n, self.t, self.dt, self.steps, 0, 0)  # forces only
+            self._forces_and_kick(self.n, self.t, self.dt, self.steps, self._conduct_every, 0, 0)  # forces only
         else:
-            self._own_forces(self.n, self.t, self.dt, self.steps)
+            self._own_forces(self.n, self.t, self.dt, self.steps, self._conduct_every)
             self._finish_forces()
         self.check()
 
@@ -201,11 +204,13 @@ class Solver:
         if self.gas is not None and self.steps % self.gas.interval == 0:
             self._gas_step()
             t = clock()
+        # the conduction at steps 1, m + 1, 2 m + 1, ... for m steps each: the heat balances after every m steps
+        conduct = self._conduct_every if (self.steps - 1) % self._conduct_every == 0 else 0
         if self._fused and not self.split_passes:  # one launch: own pass, then the kick finishes the forces
-            self._forces_and_kick(self.n, self.t, dt, self.steps, int(drift_next), 1)
+            self._forces_and_kick(self.n, self.t, dt, self.steps, conduct, int(drift_next), 1)
             t = lap("forces and kick", t)
         else:
-            self._own_forces(self.n, self.t, dt, self.steps)
+            self._own_forces(self.n, self.t, dt, self.steps, conduct)
             t = lap("contact forces", t)
             if not self._fused:  # else the kick finishes the forces (partner pass, gas forces)
                 self._finish_forces()

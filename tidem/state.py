@@ -186,6 +186,8 @@ def _place_heat_fields(p: _Placer, model: Model) -> None:
     p.place((NS,), "surf_T")
     p.place((NS,), "surf_rate")
     p.place((NS,), "surf_energy", ti.f64)
+    p.S.conduct = ti.field(ti.i32)  # this step's conduction: heat.conduction_interval steps of it, or 0 (kernels/contact.py)
+    p.fb.place(p.S.conduct)
     n_tubes, bins = len(model.tubes), model.angle_bins
     if bins:
         p.place((n_tubes, bins), "tube_bin_rate")

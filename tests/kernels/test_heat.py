@@ -21,22 +21,32 @@ def test_alpha_wp_hand_calculation():
     assert schluender_alpha_wp(0.026, 1e-3, 1.068e-6) == pytest.approx(537.1, rel=1e-3)
 
 
-def test_two_fixed_spheres_relax_as_the_lumped_solution(solver_for):
-    overlap = 1e-5
-    raw = make_scene(
+def touching_pair(overlap, **heat):
+    """Two fixed steel spheres overlapping by `overlap`, at 423.15 and 293.15 K; dt = 0.1 s."""
+    return make_scene(
         materials={"steel": STEEL},
         particles=[{"name": "hot", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
                     "positions": [[-R + overlap / 2, 0, 0]], "temperature": 423.15, "fixed": True},
                    {"name": "cold", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
                     "positions": [[R - overlap / 2, 0, 0]], "temperature": 293.15, "fixed": True}],
-        heat={},
+        heat=heat,
         numerics={"dt": 0.1, "force_dt": True},
     )
-    s = solver_for(raw)
+
+
+def touching_pair_conductance(overlap):
+    """Contact spot (Batchelor & O'Brien, a = sqrt(R* delta)) and the gas lens around it [W/K]."""
+    h = 2 * 16.0 * math.sqrt(R / 2 * overlap)
+    return h + pfp_conductance_np(0.026, R / 2, -overlap, 1e-6 + 6.8e-8, 0.4 * R)
+
+
+@pytest.mark.parametrize("every", [1, 10])
+def test_two_fixed_spheres_relax_as_the_lumped_solution(solver_for, every):
+    """Also with heat.conduction_interval = 10 (explicit steps of 1 s, rate x 1 s = 0.005: within 1 %)."""
+    overlap = 1e-5
+    s = solver_for(touching_pair(overlap, conduction_interval=every))
     m = 7800 * 4 / 3 * math.pi * R**3
-    h = 2 * 16.0 * math.sqrt(R / 2 * overlap)  # Batchelor & O'Brien, a = sqrt(R* delta)
-    h += pfp_conductance_np(0.026, R / 2, -overlap, 1e-6 + 6.8e-8, 0.4 * R)  # and the gas lens around the spot
-    rate = h * 2 / (m * 500.0)
+    rate = touching_pair_conductance(overlap) * 2 / (m * 500.0)
     for _ in range(2000):
         s.step()
     T = s.state.T.to_numpy()
@@ -45,6 +55,22 @@ def test_two_fixed_spheres_relax_as_the_lumped_solution(solver_for):
     assert T[0] - T[1] == pytest.approx(expected, rel=0.01)
     assert T.mean() == pytest.approx(358.15, rel=1e-12)
     assert np.allclose(s.state.x.to_numpy()[:, 0], [-R + overlap / 2, R - overlap / 2])
+
+
+def test_conduction_every_m_steps_is_one_explicit_step_of_m_dt(solver_for):
+    """heat.conduction_interval = 10: the first step carries the heat of ten steps at the first
+    temperatures (one explicit Euler step of 10 dt), the next nine none."""
+    overlap, m_c = 1e-5, 7800 * 4 / 3 * math.pi * R**3 * 500.0
+    s = solver_for(touching_pair(overlap, conduction_interval=10))
+    flow = touching_pair_conductance(overlap) * 130.0  # into the cold sphere [W]
+    s.step()
+    after_one = s.state.T.to_numpy()
+    assert after_one == pytest.approx([423.15 - 10 * 0.1 * flow / m_c, 293.15 + 10 * 0.1 * flow / m_c], rel=1e-12)
+    for _ in range(9):
+        s.step()
+    assert np.array_equal(s.state.T.to_numpy(), after_one)
+    s.step()
+    assert s.state.T.to_numpy()[1] > after_one[1]
 
 
 @pytest.mark.parametrize("gap", [-1e-5, 0.0, 5e-7, 2e-5, 1e-3])
@@ -88,10 +114,11 @@ def test_spheres_apart_exchange_heat_through_the_gas_lens(solver_for):
     assert np.array_equal(s.state.T.to_numpy(), [423.15, 293.15]), "fluid_layer = 0 turns the gas path off"
 
 
-@pytest.mark.parametrize("precision", ["float64", "mixed"])
-def test_isolated_bed_keeps_its_heat(solver_for, precision):
+@pytest.mark.parametrize("precision, every", [("float64", 1), ("mixed", 1), ("float64", 7)])
+def test_isolated_bed_keeps_its_heat(solver_for, precision, every):
     """Each pair's heat flow is added to one partner and subtracted from the other, the same value
-    (with precision 'mixed' rounded to float32 once, for both): the bed's heat stays to rounding."""
+    (with precision 'mixed' rounded to float32 once, for both): the bed's heat stays to rounding,
+    also when the conduction is evaluated every 7th step (heat.conduction_interval)."""
     rng = np.random.default_rng(1)
     g = (np.arange(4) - 1.5) * 0.00995  # slightly overlapping: long contacts
     pos = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -101,7 +128,7 @@ def test_isolated_bed_keeps_its_heat(solver_for, precision):
         materials={"steel": {**STEEL, "heat_capacity": 0.05}},  # thermal time ~ 0.02 s: heat moves
         particles=[{"name": "bed", "material": "steel", "diameter": {"distribution": "mono", "value": 0.01},
                     "positions": pos.tolist(), "velocities": rng.normal(0, 0.05, pos.shape).tolist()}],
-        heat={},
+        heat={"conduction_interval": every},
         numerics={"precision": precision},
     )
     s = solver_for(raw)
@@ -118,7 +145,10 @@ def test_isolated_bed_keeps_its_heat(solver_for, precision):
     assert s.state.T.to_numpy().std() < 0.95 * spread0, "heat was exchanged"
 
 
-def test_heat_from_a_hot_tube_equals_heat_gained_by_the_bed(solver_for):
+@pytest.mark.parametrize("every", [1, 5])
+def test_heat_from_a_hot_tube_equals_heat_gained_by_the_bed(solver_for, every):
+    """The tube's delivered heat (its flow times dt, or times 5 dt at every 5th step with
+    heat.conduction_interval = 5) is what the bed gains."""
     raw = make_scene(
         domain={"min": [0, 0, 0], "max": [0.06, 0.012, 0.08], "periodic": ["x"], "gravity": [0, 0, -9.81],
                 "walls": ["y-", "y+", "z-"]},
@@ -126,7 +156,7 @@ def test_heat_from_a_hot_tube_equals_heat_gained_by_the_bed(solver_for):
         tubes=[{"center": [0.03, 0, 0.025], "axis": "y", "diameter": 0.02, "temperature": 500.0}],
         particles=[{"name": "bed", "material": "steel", "diameter": {"distribution": "mono", "value": 0.004},
                     "region": {"min": [0, 0, 0], "max": [0.06, 0.012, 0.06]}, "temperature": 300.0}],
-        heat={},
+        heat={"conduction_interval": every},
     )
     s = solver_for(raw)
     c = 7800 * 4 / 3 * math.pi * 0.002**3 * 500.0
@@ -168,6 +198,10 @@ def test_unstable_thermal_step_is_refused():
 
     raw = make_scene(materials={"steel": {**STEEL, "heat_capacity": 1e-9}}, heat={})
     with pytest.raises(SceneError, match="explicit conduction limit"):
+        build_model(validate(raw))
+    raw = touching_pair(1e-5, conduction_interval=5000)  # m c / H ~ 200 s, evaluated every 500 s
+    with pytest.raises(SceneError, match=r"heat.conduction_interval: .* every 5000 steps, an explicit step of 500 s, "
+                                         r"above the conduction limit .*; lower heat.conduction_interval to \d+ or less"):
         build_model(validate(raw))
 
 

@@ -73,16 +73,19 @@ def test_foil_and_touching_sphere_follow_the_two_body_solution(solver_for):
     assert stored == pytest.approx(FLUX * 2 * math.pi * R_TUBE * DEPTH * t, rel=1e-9)
 
 
-def test_heated_foil_wall_and_touching_sphere_follow_the_two_body_solution(solver_for):
+@pytest.mark.parametrize("every", [1, 4])
+def test_heated_foil_wall_and_touching_sphere_follow_the_two_body_solution(solver_for, every):
     """A plane wall with a heat flux: one foil over the domain's cross-section A (C_f = C_A A,
-    P = q A); the sphere on it follows `two_body`, and the heat is conserved to rounding."""
+    P = q A); the sphere on it follows `two_body`, and the heat is conserved to rounding, also
+    with heat.conduction_interval = 4 (the foil takes the held flow each step, the sphere four
+    steps of it at once: they balance after every 4 steps)."""
     overlap, c_a, flux, c_sphere = 1e-5, 1.0, 1.0, C_SPHERE / 100  # relaxes within a second
     raw = make_scene(
         materials={"steel": {**STEEL, "heat_capacity": 5.0}},
         walls=[{"point": [0, 0, -0.1], "normal": [0, 0, 1], "heat_flux": flux, "foil_heat_capacity": c_a}],
         particles=[{"name": "p", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
                     "positions": [[0, 0, -0.1 + R - overlap]], "fixed": True}],
-        heat={"initial_temperature": T0},
+        heat={"initial_temperature": T0, "conduction_interval": every},
         numerics={"dt": 1e-3, "force_dt": True},
     )
     s = solver_for(raw)

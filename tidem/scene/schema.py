@@ -256,6 +256,7 @@ class Heat(Strict):
     angle_bins: int = Field(default=36, ge=4, le=720)
     profile_start: NonNegative = 0.0
     radiation: bool = False
+    conduction_interval: int = Field(default=1, ge=1, le=10000)
 
 
 class Nozzle(Strict):
