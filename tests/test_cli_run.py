@@ -99,7 +99,8 @@ def test_scenes_lists_shipped_with_runtime():
 def test_check_prints_derived_numbers():
     result = runner.invoke(app, ["check", "moving_bed_tubes"])
     assert result.exit_code == 0, result.output
-    for word in ("Rayleigh time", "time step", "kernels:", "rolling resistance (model C)", "B/particle"):
+    for word in ("Rayleigh time", "time step", "kernels:", "rolling resistance (model C)", "B/particle",
+                 "conduction: every 10 step(s); explicit limit", "(heat.conduction_interval up to 10000)"):
         assert word in result.output
 
 

@@ -272,6 +272,7 @@ def check(
 
     from tidem.memory import format_bytes
     from tidem.output_size import output_bytes
+    from tidem.scene.schema import MAX_CONDUCTION_INTERVAL
 
     loaded = load_scene(path, set_)
     model = build_or_exit(loaded)
@@ -291,7 +292,7 @@ def check(
         + (" (does not bind: every particle is fixed)" if model.fixed.all() else ""),
         f"time step: {model.dt:.4g} s ({model.t_end / model.dt:.3g} steps to t_end = {model.t_end:g} s)",
         *([f"conduction: every {loaded.scene.heat.conduction_interval} step(s); explicit limit {model.thermal_limit:.4g} s "
-           f"(heat.conduction_interval up to {int(model.thermal_limit / model.dt)})"] if model.thermal_limit else []),
+           f"(heat.conduction_interval up to {min(int(model.thermal_limit / model.dt), MAX_CONDUCTION_INTERVAL)})"] if model.thermal_limit else []),
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
         f"kernels: {', '.join(f.kernels())}",

@@ -245,6 +245,9 @@ class Output(Strict):
     profile_bins: int | None = Field(default=None, ge=1)
 
 
+MAX_CONDUCTION_INTERVAL = 10000  # heat.conduction_interval: steps between evaluations of the conduction
+
+
 class Heat(Strict):
     """Particle temperatures and conduction (only built when the scene has this table)."""
 
@@ -256,7 +259,7 @@ class Heat(Strict):
     angle_bins: int = Field(default=36, ge=4, le=720)
     profile_start: NonNegative = 0.0
     radiation: bool = False
-    conduction_interval: int = Field(default=1, ge=1, le=10000)
+    conduction_interval: int = Field(default=1, ge=1, le=MAX_CONDUCTION_INTERVAL)
 
 
 class Nozzle(Strict):
