@@ -54,10 +54,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     """Return a namespace of the two passes: kernels `own(n, t, dt, stamp, conduct)` and `partner(n, t)`
     (None without pairs); and as Taichi funcs, for kernels that fuse them with the rest of the step
     (`kernels/integrate.py`), `own_pass(n, t, dt, stamp, conduct)`, the body of `own`, and
-    `gather(i, t)`, the partner pass for one particle. With heat, `conduct` = m > 0 evaluates the conduction and
-    books the heat of m steps (q[i] = m x the heat flow: heat.conduction_interval = m evaluates it every
-    m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] = 0; the surfaces' heat
-    flows of the last evaluation hold); S.conduct[None] tells the partner pass and the kick.
+    `gather(i, t)`, the partner pass for one particle. With heat, `conduct` = m > 0 evaluates the
+    conduction and books the heat of m steps (q[i] = m x the heat flow: heat.conduction_interval = m
+    evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
+    0; the surfaces' heat flows of the last evaluation hold); S.conduct[None] tells the partner pass
+    and the kick.
     `single_material` loads the pair parameters once per particle; `heat` adds conduction
     (kernels/heat.py) to the same loop, writing q[i] [W] and the heat flow into each surface with a
     temperature, surf_rate[s] [W] (into the bed > 0), and with `angle_bins` the heat flow from each tube

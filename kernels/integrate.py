@@ -88,16 +88,15 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     def advance_surfaces(dt):
         """Heat delivered by each surface and the heated foils over one step (a few items each: serial
         loops, without a thread-pool round trip)."""
-        booked = dt  # the time over which the particles receive the surfaces' heat flows this step
         if ti.static(heat):
-            booked = dt * S.conduct[None]  # m dt at an evaluation of the conduction, 0 between
+            booked = dt * S.conduct[None]  # the particles get the flows over m dt at an evaluation, 0 between
             ti.loop_config(serialize=True)
             for s in range(n_surf):
                 S.surf_energy[s] += booked * S.surf_rate[s]
-        if ti.static(angle_bins > 0):
-            ti.loop_config(serialize=True)
-            for k, b in ti.ndrange(*S.tube_bin_rate.shape):
-                S.tube_bin_energy[k, b] += booked * S.tube_bin_rate[k, b]
+            if ti.static(angle_bins > 0):  # heated tubes: only with heat
+                ti.loop_config(serialize=True)
+                for k, b in ti.ndrange(*S.tube_bin_rate.shape):
+                    S.tube_bin_energy[k, b] += booked * S.tube_bin_rate[k, b]
         if ti.static(foil):
             ti.loop_config(serialize=True)
             for k, b in ti.ndrange(*S.tube_bin_T.shape):
