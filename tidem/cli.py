@@ -55,7 +55,7 @@ def scene(
         ensure_taichi(arch, loaded.scene.numerics.precision)
     except BackendUnavailable as exc:
         fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
-    except ValueError as exc:  # TIDEM_COMPILE
+    except ValueError as exc:  # TIDEM_COMPILE or TIDEM_BIND
         fail(str(exc), 2)
     model = build_or_exit(loaded, smoke=smoke, t_end=t_end)
     from tidem.run import run

@@ -23,6 +23,8 @@ import sys
 
 import taichi as ti
 
+from tidem.thread_binding import bind_mode, bind_workers, process_threads
+
 _current: tuple[str, str, int] | None = None
 COMPILE_MODES = ("auto", "full", "fast")
 _auto: dict[tuple[str, int], str] = {}  # what 'auto' started, by (precision, threads)
@@ -76,6 +78,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
     """
     global _current
     mode = compile_mode()
+    bind_mode()  # TIDEM_BIND, checked before Taichi starts
     threads = threads or int(os.environ.get("TI_CPU_MAX_NUM_THREADS", os.cpu_count() or 1))
     if arch == "auto" and (precision, threads) in _auto:
         return ensure_taichi(_auto[precision, threads], precision, threads)
@@ -95,6 +98,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
     if _current is not None:
         ti.reset()
     fp = ti.f32 if precision == "float32" else ti.f64  # 'mixed' stores only the contact history in float32
+    existing = process_threads()
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
         ti.init(
@@ -112,7 +116,16 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
         _current = None
         raise BackendUnavailable(f"Taichi could not start the '{arch}' backend here (got '{started}')")
     _current = key
+    if started == "cpu":
+        bind_workers(threads, process_threads() - existing, _busy_loop)
     return started
+
+
+def _busy_loop() -> None:
+    """Some milliseconds of a parallel loop on every CPU worker (`tidem.thread_binding`)."""
+    from tidem.kernels.busy import busy_loop
+
+    busy_loop(1 << 16)
 
 
 def _started_arch() -> str:
