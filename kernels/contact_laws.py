@@ -42,7 +42,9 @@ ESTAR, GSTAR, GAMMA, KAPPA, MU_S, MU_D, MU_R, ETA_R, UNLOAD_RATIO, E_I, E_J = ra
 # for a softened modulus, gas conductivity, mean free path + roughness (wall contacts), and
 # the exchange emissivity of a particle-surface pair (0 without heat.radiation)
 K_EFF, A_CORR, LAMBDA_GAS, GAP, EMIS = range(11, 16)
-N_PARAMS = 16
+# square roots the laws' dashpots take, computed once per material pair: sqrt(2 E*), sqrt(8 G*), sqrt(kappa)
+ROOT_2E, ROOT_8G, ROOT_KAPPA = range(16, 19)
+N_PARAMS = 19
 
 LINEAR, HERTZ, HYSTERETIC, NONE = 0, 1, 2, 3
 LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC, "none": NONE}
@@ -50,12 +52,12 @@ LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC, "
 
 @ti.func
 def rotate_into_plane(h, n):
-    """Project a history vector onto the plane normal to n, keeping its length."""
-    length = h.norm()
+    """Project a history vector onto the plane normal to n, keeping its length (scaled by
+    sqrt(|h|^2 / |h_projected|^2): one square root)."""
     out = h - h.dot(n) * n
-    new_len = out.norm()
-    if new_len > 0.0:
-        out *= length / new_len
+    new2 = out.norm_sqr()
+    if new2 > 0.0:
+        out *= ti.sqrt(h.norm_sqr() / new2)
     return out
 
 
@@ -70,12 +72,13 @@ def make_contact_response(law: int, rolling: bool):
         k_ref = 0.0  # stiffness for the tangential and rolling springs
         eta_scale = 0.0
         root = 0.0
+        damp = 0.0  # sqrt(k_ref m_eff / p[ROOT_2E]^2) for Hertz: both dashpots take it
         if ti.static(law == HERTZ):
             root = ti.sqrt(r_eff * delta)
-            s_n = 2.0 * p[ESTAR] * root
-            f_n = 4.0 / 3.0 * p[ESTAR] * root * delta + 2.0 * ti.sqrt(5.0 / 6.0) * p[GAMMA] * ti.sqrt(s_n * m_eff) * v_n
-            k_ref = s_n
+            k_ref = 2.0 * p[ESTAR] * root
+            damp = ti.sqrt(root * m_eff)
             eta_scale = 2.0 * ti.sqrt(5.0 / 6.0)
+            f_n = 4.0 / 3.0 * p[ESTAR] * root * delta + eta_scale * p[GAMMA] * p[ROOT_2E] * damp * v_n
         else:
             k_n = p[E_I] * d_i
             if p[E_J] > 0.0:
@@ -83,7 +86,8 @@ def make_contact_response(law: int, rolling: bool):
             k_ref = k_n
             eta_scale = 2.0
             if ti.static(law == LINEAR):
-                f_n = k_n * delta + 2.0 * p[GAMMA] * ti.sqrt(k_n * m_eff) * v_n
+                damp = ti.sqrt(k_n * m_eff)
+                f_n = k_n * delta + 2.0 * p[GAMMA] * damp * v_n
             else:
                 k_ul = k_n * p[UNLOAD_RATIO]
                 dmax = ti.max(dmax, delta)
@@ -93,16 +97,23 @@ def make_contact_response(law: int, rolling: bool):
         f_pos = ti.max(f_n, 0.0)
 
         # tangential spring with Coulomb cap
+        # the dashpot's sqrt(k_t m_eff) from the normal one's: k_t / k_ref is a constant of the pair
         k_t = k_ref * p[KAPPA]
+        eta_t = 0.0
         if ti.static(law == HERTZ):
             k_t = 8.0 * p[GSTAR] * root
-        eta_t = eta_scale * p[GAMMA] * ti.sqrt(k_t * m_eff)
+            eta_t = eta_scale * p[GAMMA] * p[ROOT_8G] * damp
+        elif ti.static(law == LINEAR):
+            eta_t = eta_scale * p[GAMMA] * p[ROOT_KAPPA] * damp
+        else:
+            eta_t = eta_scale * p[GAMMA] * ti.sqrt(k_t * m_eff)
         xi = rotate_into_plane(xi, n) + v_t * dt
         f_t = -k_t * xi - eta_t * v_t
-        ft_norm = f_t.norm()
-        if ft_norm > p[MU_S] * f_pos:
-            if ft_norm > 0.0:
-                f_t *= p[MU_D] * f_pos / ft_norm
+        cap = p[MU_S] * f_pos
+        ft2 = f_t.norm_sqr()
+        if ft2 > cap * cap:  # sliding (compared squared: a square root only then)
+            ft_norm = ti.sqrt(ft2)
+            f_t *= p[MU_D] * f_pos / ft_norm
             if k_t > 0.0:
                 xi = -(f_t + eta_t * v_t) / k_t
 
@@ -113,10 +124,9 @@ def make_contact_response(law: int, rolling: bool):
             k_r = r_eff * r_eff * k_ref
             mr = rotate_into_plane(mr, n) - k_r * w_roll * dt
             m_lim = p[MU_R] * r_eff * f_pos
-            mr_norm = mr.norm()
-            if mr_norm > m_lim:
-                if mr_norm > 0.0:
-                    mr *= m_lim / mr_norm
+            mr2 = mr.norm_sqr()
+            if mr2 > m_lim * m_lim:
+                mr *= m_lim / ti.sqrt(mr2)
                 m_roll = mr
             else:
                 m_roll = mr - p[ETA_R] * 2.0 * ti.sqrt(i_roll * k_r) * w_roll

@@ -63,7 +63,9 @@ def test_a_shuffled_storage_mid_run_follows_the_same_trajectories(solver_for):
     for _ in range(150):
         plain.step()
         shuffled.step()
-    assert_same_trajectories(plain.state, shuffled.state, 1e-12)
+    # rounding differences of the sums grow in this sheared bed, about 10x per 50 steps: 1e-16 after 5 steps,
+    # 1e-13 after 50, 1e-12 (spins) after 150; an error of the sort is 1e-6 m and more
+    assert_same_trajectories(plain.state, shuffled.state, 1e-10)
 
 
 def test_sorted_and_unsorted_runs_follow_the_same_trajectories(solver_for):

@@ -138,7 +138,8 @@ def restore(solver, meta: dict, arrays: dict) -> None:
     for name, fld in fields.items():
         if arrays[name].shape != fld.to_numpy().shape:
             raise CheckpointError(f"{name}: checkpoint shape {arrays[name].shape} does not match the scene's "
-                                  f"{fld.to_numpy().shape}")
+                                  f"{fld.to_numpy().shape} (made by another version of tidem, or for other "
+                                  "capacities): start a new run")
         fld.from_numpy(arrays[name])
     solver.restored()
     s = meta["solver"]

@@ -68,6 +68,7 @@ def pair_vector(a, b, wall_friction=None, heat=None) -> np.ndarray:
     p[cl.UNLOAD_RATIO] = 1.0 / hysteretic_stiffness_ratio(e)
     p[cl.E_I] = a.youngs_modulus
     p[cl.E_J] = b.youngs_modulus
+    p[cl.ROOT_2E], p[cl.ROOT_8G], p[cl.ROOT_KAPPA] = math.sqrt(2 * e_star), math.sqrt(8 * g_star), math.sqrt(p[cl.KAPPA])
     if heat is not None:
         k_a = a.conductivity or 0.0
         k_b = b.conductivity or k_a
