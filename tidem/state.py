@@ -15,8 +15,9 @@ Per-particle fields, shape [capacity]:
   ncontact         number of contacts
   ident            the particle's index in the Model's arrays (storage is re-sorted into
                    cell order as the bed flows, `tidem.storage_order`)
-Neighbour list, shape [capacity, K]: nbr (partner), ft (tangential spring [m]), mr (rolling
-spring [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild.
+Neighbour list, shape [capacity, K], stored slot-major (`_Placer.rows`): nbr (partner), ft
+(tangential spring [m]), mr (rolling spring [N m]), dmax (maximum overlap [m]); nbr_new and src
+are scratch rows of the rebuild.
 In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) ft holds
 the force on the owner [N] and src the step of the last force pass that found the pair
 touching (stamp[None], the current pass's step), both written by the owner. With
@@ -119,6 +120,13 @@ class _Placer:
         self.place(shape, name, dtype, n)
         self.S.particle_fields.append(name)
 
+    def rows(self, shape, name, dtype=None, n=None):
+        """A Verlet-row field [capacity, K], stored slot by slot: slot k of consecutive particles sits
+        side by side, so that the force loops, which walk the particles in order and read each row's
+        first nbr_n slots, stream only the slots in use (the code still indexes it [i, k])."""
+        self.fb.dense(ti.j, shape[1]).dense(ti.i, shape[0]).place(self.make(name, dtype, n))
+        self.S.particle_fields.append(name)
+
 
 def _place_contact_fields(p: _Placer, model: Model) -> None:
     """Particles, neighbour list and wall slots with their contact history, the broad phase's
@@ -144,16 +152,16 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.per_particle((N,), "touch_start")
         p.per_particle((N,), "touch_end")
     for name in ("nbr", "nbr_new", "src"):
-        p.per_particle((N, K), name, ti.i32)
+        p.rows((N, K), name, ti.i32)
     hist = history_dtype(feat)
-    p.per_particle((N, K), "ft", hist, n=3)
+    p.rows((N, K), "ft", hist, n=3)
     p.per_particle((N, W), "wid", ti.i32)
     p.per_particle((N, W), "wft", n=3)
     if feat.rolling:
-        p.per_particle((N, K), "mr", hist, n=3)
+        p.rows((N, K), "mr", hist, n=3)
         p.per_particle((N, W), "wmr", n=3)
     if feat.hysteretic:
-        p.per_particle((N, K), "dmax", hist)
+        p.rows((N, K), "dmax", hist)
         p.per_particle((N, W), "wdmax")
     nc = model.grid.n_cells
     for name in ("cell_count", "cell_start", "cell_fill"):
@@ -181,7 +189,7 @@ def _place_heat_fields(p: _Placer, model: Model) -> None:
     for name in ("T", "q", "inv_heat_cap"):
         p.per_particle((N,), name)
     if feat.contacts:
-        p.per_particle((N, K), "qpair", history_dtype(feat))
+        p.rows((N, K), "qpair", history_dtype(feat))
     NS = max(len(model.planes) + len(model.tubes), 1)
     p.place((NS,), "surf_T")
     p.place((NS,), "surf_rate")
