@@ -22,7 +22,7 @@ from .geometry import make_geometry
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
                      growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None):
     """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, stamp,
-    conduct, drift, kick)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
+    conduct, diag, drift, kick)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
     (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
     drift: 0 or 1; a kernel's return value would cost the host more than reading the field).
     With heat, `kick` also advances temperatures explicitly, T += dt q / (m c), and the heat
@@ -30,7 +30,7 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
     (the partner pass of the contact forces, the gas forces); `kick` calls them on each particle
     first, which saves a kernel launch and a pass over the particles per step.
-    `forces`: a Taichi func forces(n, t, dt, stamp, conduct) (the contacts' own pass, `kernels/contact.py`);
+    `forces`: a Taichi func forces(n, t, dt, stamp, conduct, diag) (the contacts' own pass, `kernels/contact.py`);
     `forces_and_kick` runs it and then the kick in one kernel launch: one Python call and one
     wake-up of the thread pool less per step (None without `forces`); with kick = 0 it only
     evaluates the forces (the run's first evaluation, so that no other kernel compiles them).
@@ -144,8 +144,9 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         return kick_drift, kick, None
 
     @ti.kernel
-    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, conduct: ti.i32, drift: ti.i32, kick: ti.i32):
-        forces(n, t, dt, stamp, conduct)
+    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, conduct: ti.i32, diag: ti.i32, drift: ti.i32,
+                        kick: ti.i32):
+        forces(n, t, dt, stamp, conduct, diag)
         kick_pass(n, t, dt, drift, kick)
 
     return kick_drift, kick, forces_and_kick

@@ -12,7 +12,7 @@ import taichi as ti
 
 from tests.test_storage_order import shuffled_bed
 
-FIELDS = ("x", "v", "w", "f", "tq", "T", "ft", "mr", "ncontact")
+FIELDS = ("x", "v", "w", "f", "tq", "T", "ft", "mr", "ncontact", "ovl")
 
 
 def hot_and_cold_bed() -> dict:

@@ -112,8 +112,8 @@ def test_conduction_every_few_steps_resumes_bit_identical(tmp_path):
 def test_sigterm_checkpoints_at_a_step_boundary_and_resume_is_bit_identical(uninterrupted, tmp_path, monkeypatch):
     real_step = Solver._step
 
-    def step(self, drift_next):
-        real_step(self, drift_next)
+    def step(self, drift_next, diag):
+        real_step(self, drift_next, diag)
         if self.steps == 777:
             os.kill(os.getpid(), signal.SIGTERM)
 

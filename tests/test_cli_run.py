@@ -73,10 +73,10 @@ def test_ctrl_c_keeps_finished_output(tmp_path, monkeypatch):
 
     real_step = Solver._step
 
-    def step(self, drift_next):
+    def step(self, drift_next, diag):
         if self.steps == 300:
             raise KeyboardInterrupt
-        real_step(self, drift_next)
+        real_step(self, drift_next, diag)
 
     monkeypatch.setattr(Solver, "_step", step)
     out = tmp_path / "stop"

@@ -12,6 +12,8 @@ are one kernel launch (`forces_and_kick`), and `advance(k)`, which the run loop 
 outputs, has each kick go on with the next step's kick-drift: a step is then one kernel launch
 (plus the gas step and the neighbour build when due), bit for bit the same as k calls of
 `step()` and as separate kernels (`split_passes`, which `tidem bench --profile` sets).
+The contact counts and overlaps (`ovl`, `ncontact`) are filled only in the last step of
+`advance(k)` and at health checks, where the host reads them.
 Each phase's wall time is booked in `timer` (`tidem.phases`, run.json's profile). Health
 checks (NaN, runaway overlap, capacity overflow) run every `numerics.check_interval` steps
 and raise `RunError` naming the particle and the fix.
@@ -146,9 +148,9 @@ class Solver:
         if self.gas is not None:
             self._gas_step()
         if self._fused:
-            self._forces_and_kick(self.n, self.t, self.dt, self.steps, self._conduct_every, 0, 0)  # forces only
+            self._forces_and_kick(self.n, self.t, self.dt, self.steps, self._conduct_every, 1, 0, 0)  # forces only
         else:
-            self._own_forces(self.n, self.t, self.dt, self.steps, self._conduct_every)
+            self._own_forces(self.n, self.t, self.dt, self.steps, self._conduct_every, 1)
             self._finish_forces()
         self.check()
 
@@ -168,7 +170,7 @@ class Solver:
         """Take `steps` steps with nothing read by the host between them: the kick of each step but
         the last goes on with the next step's kick-drift in the same kernel (`kernels/integrate.py`)."""
         for k in range(steps):
-            self._step(drift_next=k < steps - 1)
+            self._step(drift_next=k < steps - 1, diag=k == steps - 1)
 
     def steps_until(self, due, every: int, last: int) -> int:
         """The number of steps (at least one) until the first step end at time t with due(t), a
@@ -182,7 +184,9 @@ class Solver:
             if due(t) or n % every == 0 or n % self._check_every == 0 or n >= last:
                 return k
 
-    def _step(self, drift_next: bool) -> None:
+    def _step(self, drift_next: bool, diag: bool) -> None:
+        """One step; `diag`: the host reads the contact counts and overlaps after it (also at every health
+        check; `kernels/contact.py`)."""
         dt = self.dt
         lap = self.timer.lap
         t = clock()
@@ -206,11 +210,12 @@ class Solver:
             t = clock()
         # the conduction at steps 1, m + 1, 2 m + 1, ... for m steps each: the heat balances after every m steps
         conduct = self._conduct_every if (self.steps - 1) % self._conduct_every == 0 else 0
+        diag = int(diag or not self._fused or self.steps % self._check_every == 0)  # reactions: always
         if self._fused and not self.split_passes:  # one launch: own pass, then the kick finishes the forces
-            self._forces_and_kick(self.n, self.t, dt, self.steps, conduct, int(drift_next), 1)
+            self._forces_and_kick(self.n, self.t, dt, self.steps, conduct, diag, int(drift_next), 1)
             t = lap("forces and kick", t)
         else:
-            self._own_forces(self.n, self.t, dt, self.steps, conduct)
+            self._own_forces(self.n, self.t, dt, self.steps, conduct, diag)
             t = lap("contact forces", t)
             if not self._fused:  # else the kick finishes the forces (partner pass, gas forces)
                 self._finish_forces()

@@ -179,7 +179,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_r")
     p.S.max_disp = ti.field(p.fp)
     p.S.stamp = ti.field(ti.i32)
-    p.fb.place(p.S.max_disp, p.S.stamp)
+    p.S.diag = ti.field(ti.i32)  # this force pass fills ovl and ncontact (kernels/contact.py)
+    p.fb.place(p.S.max_disp, p.S.stamp, p.S.diag)
 
 
 def _place_heat_fields(p: _Placer, model: Model) -> None:

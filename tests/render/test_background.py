@@ -107,11 +107,11 @@ def test_ctrl_c_during_the_run_keeps_finished_frames_and_stops_the_worker(tmp_pa
 
     real_step = Solver._step
 
-    def step(self, drift_next):
+    def step(self, drift_next, diag):
         if self.steps == 600:
             wait_for(lambda: (out / "frames" / "frame_00001.png").exists())
             raise KeyboardInterrupt
-        real_step(self, drift_next)
+        real_step(self, drift_next, diag)
 
     monkeypatch.setattr(background.BackgroundRenderer, "__call__", call)
     monkeypatch.setattr(Solver, "_step", step)
