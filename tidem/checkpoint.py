@@ -29,7 +29,7 @@ FORMAT = 1
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # Rewritten by every force pass (the positions the partner pass reads, kernels/contact.py): not kept.
-TRANSIENT = ("xf", "stamp", "split", "conduct")  # rewritten before use (split: by `restore`, from the rows)
+TRANSIENT = ("xf", "stamp", "split", "conduct", "diag")  # rewritten before use (split: by `restore`, from the rows)
 
 
 class CheckpointError(RuntimeError):
@@ -134,7 +134,8 @@ def restore(solver, meta: dict, arrays: dict) -> None:
     fields = _fields(solver)
     missing = sorted(set(fields) - set(arrays))
     if missing:
-        raise CheckpointError(f"the checkpoint lacks {', '.join(missing[:5])}: it was made with other physics")
+        raise CheckpointError(f"the checkpoint lacks {', '.join(missing[:5])}: it was made with other physics or by "
+                              "another version of tidem; start a new run")
     for name, fld in fields.items():
         if arrays[name].shape != fld.to_numpy().shape:
             raise CheckpointError(f"{name}: checkpoint shape {arrays[name].shape} does not match the scene's "
