@@ -1,5 +1,6 @@
-"""The compile policy of `tidem.runtime`: TIDEM_COMPILE and the `hot` kernels."""
+"""The compile policy of `tidem.runtime`: TIDEM_COMPILE and the `hot` kernels; TIDEM_BIND's check."""
 
+import pytest
 import taichi as ti
 from typer.testing import CliRunner
 
@@ -26,9 +27,11 @@ def test_hot_is_a_no_op_in_fast_mode(monkeypatch):
     assert hot(plain) is plain
 
 
-def test_unknown_compile_mode_is_a_clear_error(monkeypatch):
-    monkeypatch.setenv("TIDEM_COMPILE", "fastest")
+@pytest.mark.parametrize("variable, value, choices", [("TIDEM_COMPILE", "fastest", "auto, full, fast"),
+                                                     ("TIDEM_BIND", "sockets", "auto, cores, none")])
+def test_unknown_runtime_mode_is_a_clear_error(monkeypatch, variable, value, choices):
+    monkeypatch.setenv(variable, value)
     result = CliRunner().invoke(app, ["scene", "sphere_impact", "--smoke", "--no-render", "--quiet"])
     assert result.exit_code == 2
-    assert "TIDEM_COMPILE='fastest': use one of auto, full, fast" in result.output
+    assert f"{variable}='{value}': use one of {choices}" in result.output
     assert "Traceback" not in result.output

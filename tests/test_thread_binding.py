@@ -4,10 +4,8 @@ ti.init (conftest) binds them when the machine has as many CPUs as workers; TIDE
 import os
 
 import pytest
-from typer.testing import CliRunner
 
 from tidem import runtime
-from tidem.cli import app
 from tidem.thread_binding import bind_workers, one_cpu_per_core, process_threads, run_time_ns
 
 
@@ -57,10 +55,3 @@ def test_first_cpu_of_each_core_first(tmp_path):
     assert one_cpu_per_core([0, 1, 2, 3], tmp_path) == [0, 2, 1, 3]
     assert one_cpu_per_core([0, 1, 7], tmp_path) == [0, 7, 1]  # no topology for cpu7: a core of its own
 
-
-def test_unknown_bind_mode_is_a_clear_error(monkeypatch):
-    monkeypatch.setenv("TIDEM_BIND", "sockets")
-    result = CliRunner().invoke(app, ["scene", "sphere_impact", "--smoke", "--no-render", "--quiet"])
-    assert result.exit_code == 2
-    assert "TIDEM_BIND='sockets': use one of auto, cores, none" in result.output
-    assert "Traceback" not in result.output
