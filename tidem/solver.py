@@ -210,7 +210,7 @@ class Solver:
             t = clock()
         # the conduction at steps 1, m + 1, 2 m + 1, ... for m steps each: the heat balances after every m steps
         conduct = self._conduct_every if (self.steps - 1) % self._conduct_every == 0 else 0
-        diag = int(diag or not self._fused or self.steps % self._check_every == 0)  # reactions: always
+        diag = int(diag or self.steps % self._check_every == 0)
         if self._fused and not self.split_passes:  # one launch: own pass, then the kick finishes the forces
             self._forces_and_kick(self.n, self.t, dt, self.steps, conduct, diag, int(drift_next), 1)
             t = lap("forces and kick", t)
