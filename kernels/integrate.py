@@ -4,8 +4,9 @@ Step n -> n+1 (as in LAMMPS' fix nve/sphere):
   kick_drift:  v += dt/2 f/m,  w += dt/2 T/I,  x += dt v   (then periodic wrap)
   (forces at the new positions, with the half-step velocities in the dashpots)
   kick:        v += dt/2 f/m,  w += dt/2 T/I
-`kick_drift` also finds the largest displacement since the last neighbour build (kept in
-`max_disp[None]`); the run loop rebuilds the Verlet list when it exceeds half the skin. When
+`kick_drift` also finds the largest displacement since the last neighbour build, squared (kept in
+`max_disp[None]`: no square root per particle); the run loop rebuilds the Verlet list when it
+exceeds half the skin. When
 the host needs nothing between two steps, `kick(..., drift=1)` goes on with the next step's
 kick-drift for each particle in the same loop, which saves a kernel launch and a pass over the
 particles; the operations are those of the two kernels, in the same order, and the result is
@@ -22,7 +23,7 @@ from .geometry import make_geometry
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
                      growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None):
     """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, stamp,
-    conduct, diag, drift, kick)). Each leaves in S.max_disp[None] the largest displacement since the last neighbour build
+    conduct, diag, drift, kick)). Each leaves in S.max_disp[None] the largest squared displacement since the last neighbour build
     (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
     drift: 0 or 1; a kernel's return value would cost the host more than reading the field).
     With heat, `kick` also advances temperatures explicitly, T += dt q / (m c), and the heat
@@ -67,15 +68,15 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     @ti.func
     def drift_particle(i, dt, zero):
         """The kick-drift of particle i (`zero`: 0, see opaque); returns its displacement since the
-        last neighbour build."""
+        last neighbour build (plus the radius it gained), squared."""
         S.v[i] = opaque(S.v[i], zero) + 0.5 * dt * opaque(S.f[i], zero) * S.inv_mass[i]
         S.w[i] = opaque(S.w[i], zero) + 0.5 * dt * opaque(S.tq[i], zero) * S.inv_inertia[i]
         x = wrap(S.x[i] + dt * S.v[i])
         S.x[i] = x
-        moved = min_image(x - S.x_build[i]).norm()
+        moved2 = min_image(x - S.x_build[i]).norm_sqr()
         if ti.static(growth):
-            moved += S.radius[i] - S.r_build[i]
-        return moved
+            moved2 = ti.max(ti.sqrt(moved2) + S.radius[i] - S.r_build[i], 0.0) ** 2
+        return moved2
 
     @ti.kernel
     def kick_drift(n: ti.i32, dt: float):

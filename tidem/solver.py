@@ -194,7 +194,7 @@ class Solver:
             self._kick_drift(self.n, dt)
         self.t += dt
         self.steps += 1
-        need = self.state.max_disp[None] > 0.5 * self.model.skin
+        need = self.state.max_disp[None] > (0.5 * self.model.skin) ** 2  # squared displacement
         self._drift_done = False
         t = lap("kick-drift", t)
         if self._recycle is not None:
