@@ -6,10 +6,9 @@ Step n -> n+1 (as in LAMMPS' fix nve/sphere):
   kick:        v += dt/2 f/m,  w += dt/2 T/I
 `kick_drift` also finds the largest displacement since the last neighbour build, squared (kept in
 `max_disp[None]`: no square root per particle); the run loop rebuilds the Verlet list when it
-exceeds half the skin. When
-the host needs nothing between two steps, `kick(..., drift=1)` goes on with the next step's
-kick-drift for each particle in the same loop, which saves a kernel launch and a pass over the
-particles; the operations are those of the two kernels, in the same order, and the result is
+exceeds half the skin. When the host needs nothing between two steps, `kick(..., drift=1)` goes
+on with the next step's kick-drift for each particle in the same loop, which saves a kernel
+launch and a pass over the particles; the operations are those of the two kernels, in the same order, and the result is
 bit-identical (the partner pass reads the positions of the force pass, `kernels/contact.py`). With
 growing particles the radius gained since the build counts as displacement (a pair's gap
 closes by both moves and both growths, so max(move + growth) <= skin / 2 keeps the list valid).
