@@ -82,6 +82,7 @@ class Solver:
             self._average = make_averaging_kernel(model.grid, a.lo, a.cells, a.size, f.n_tubes, a.rings, a.ring_width,
                                                   a.sectors, f.heat, self.state)
         self._check_every = model.scene.numerics.check_interval
+        self._rebuild_disp2 = (0.5 * model.skin) ** 2  # kick_drift leaves the largest displacement squared
         heat = model.scene.heat
         self._conduct_every = heat.conduction_interval if heat is not None else 1  # steps per conduction evaluation
         # scenes whose outputs follow particles by storage index (pours, reactions, contact timing) keep their
@@ -194,7 +195,7 @@ class Solver:
             self._kick_drift(self.n, dt)
         self.t += dt
         self.steps += 1
-        need = self.state.max_disp[None] > (0.5 * self.model.skin) ** 2  # squared displacement
+        need = self.state.max_disp[None] > self._rebuild_disp2
         self._drift_done = False
         t = lap("kick-drift", t)
         if self._recycle is not None:
