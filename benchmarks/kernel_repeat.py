@@ -1,4 +1,4 @@
-"""The contacts' own pass (in a scene with heat also without the conduction, as between two
+"""The contact passes (in a scene with heat also without the conduction, as between two
 evaluations of it) and the neighbour build, each called again and again on one fixed state (a
 scene's checkpoint): the cleanest figure for a change to one of these kernels, since neither the
 state nor the work changes between calls.
@@ -37,9 +37,9 @@ def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
     advance(solver, 20)
     n, t, dt = solver.n, solver.t, solver.dt
     # as most steps run it: no contact counts and overlaps for the host (kernels/contact.py)
-    kernels = {"own pass": lambda: solver._own_forces(n, t, dt, solver.steps, 1, 0)}
+    kernels = {"contact passes": lambda: solver._forces(n, t, dt, 1, 0)}
     if model.features.heat:  # a step between two evaluations of the conduction (heat.conduction_interval)
-        kernels["own pass without conduction"] = lambda: solver._own_forces(n, t, dt, solver.steps, 0, 0)
+        kernels["contact passes without conduction"] = lambda: solver._forces(n, t, dt, 0, 0)
     if solver._rebuild is not None:
         kernels["neighbour build"] = lambda: solver._rebuild(n)
     for name, call in kernels.items():

@@ -2,25 +2,24 @@
 
 Algorithm (O(N) per rebuild):
 1. count particles per cell (atomic add), exclusive prefix sum, scatter particle indices into
-   cell order (counting sort);
+   cell order (counting sort); note each particle's slab (`kernels/geometry.py`, `slab_layout`)
+   and list the particles of each slab in index order (`slab_list` from `slab_start[s]`: a serial
+   pass, so that the contact pass sweeps each slab in the same order on any thread count);
 2. for every particle i, scan the 27 cells around it (as nine runs of three cells along z,
    which are adjacent in the sorted index) and keep every j != i with
-   |x_j - x_i| < r_i + r_j + skin (a *full* list: each pair appears in both rows, so the force
-   loop writes only its own particle and needs no atomics, which keeps runs deterministic);
-3. sort the row by partner index (so the result does not depend on thread timing), then
-   carry each contact's history (tangential spring, rolling spring, maximum overlap) from the
-   old row to the partner's slot in the new row. Both rows are sorted, so matching is a
-   merge, and the history is moved in place: entries moving right are moved first in
-   descending order, then entries moving left in ascending order, then new slots are zeroed.
-
-4. for every entry (i, k) with partner j > i, find the slot of i in j's row (the count of j's
-   partners below i, the row being sorted) and keep it in `src[i, k]` (the mirror slot; -1
-   otherwise). The contact kernel evaluates a
-   pair once, in the lower index's row, and hands the force to the partner through it
-   (`kernels/contact.py`); `src` is scratch of step 3 until then. For partners j < i it is -1,
-   and each force pass stamps it with its step while the pair touches (`kernels/contact.py`).
-   `split[i]` counts the entries with j < i: the force pass's own loop starts there and the
-   partner pass ends there.
+   |x_j - x_i| < r_i + r_j + skin that i *owns*: a pair is listed once, in the row of the
+   particle in the slab before the other's, or, in one slab (or in two slabs that are each other's
+   successor), in the row of the lower `ident` (the particle's scene index, which a storage
+   re-sort does not change); the contact pass (`kernels/contact.py`) evaluates it there and adds
+   the reaction to the partner, which lies in the owner's slab or the next one;
+3. sort the row by partner index (so the result does not depend on thread timing) into the
+   scratch rows `nbr_new`, and match it with the old row by a merge of sorted rows (`src[i, k]`:
+   the old slot, -1 for a new pair). A pair listed before in the partner's row (its owner
+   changed: one of the two crossed into another slab) takes its history from there, seen from
+   the new owner's side (springs change sign), through a buffer (`flip_*`, `src` = -2 - entry);
+4. carry the history in place: entries moving right are moved first in descending order, then
+   entries moving left in ascending order, then new slots are filled or zeroed.
+Steps 3 and 4 are separate loops, so that no row changes while another particle reads it.
 
 A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
 error that names the setting to raise (never a silent drop).
@@ -28,44 +27,55 @@ error that names the setting to raise (never a silent drop).
 
 import taichi as ti
 
-from .geometry import make_geometry
+from .geometry import make_geometry, make_slabs
 
 
 def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False,
                           after=()):
-    """Return the kernels `rebuild(n)`, which refreshes `S.nbr`, `S.nbr_n`, moves the contact history
-    and finds the mirror slots `S.src` and `S.split` (steps 1-4, then the Taichi funcs f(n) in
-    `after`, in one kernel launch), and `count_split(n)`, which finds `S.split` of the rows as they are.
+    """Return the kernel `rebuild(n)`, which refreshes `S.nbr`, `S.nbr_n`, the slabs (`S.slab`,
+    `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, then the Taichi funcs
+    f(n) in `after`, in one kernel launch).
 
     S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
     grow) each row also records the particle's radius at the build, `S.r_build`.
     """
     min_image, _wrap, cell_coord, cell_id = make_geometry(grid)
+    n_slabs, slab_of, succ, pred = make_slabs(grid)
     cells = grid.cells
     per = grid.periodic
     n_cells = grid.n_cells
     # the neighbour cells along each axis: -1, 0, +1, or on a periodic axis of fewer than three
     # cells each of its cells once (0, +1 wrapped), so that no cell is scanned twice
     span = [(0, cells[a]) if per[a] and cells[a] < 3 else (-1, 2) for a in range(3)]
+    zero3 = ti.Vector([0.0, 0.0, 0.0])
 
     @ti.func
     def count_cells(n):
         for c in range(n_cells):
             S.cell_count[c] = 0
+        for s in range(n_slabs + 1):
+            S.slab_start[s] = 0
         for i in range(n):
             if S.active[i]:
                 c = cell_id(cell_coord(S.x[i]))
                 S.pcell[i] = c
                 ti.atomic_add(S.cell_count[c], 1)
+                s = slab_of(S.x[i])
+                S.slab[i] = s
+                ti.atomic_add(S.slab_start[s + 1], 1)
 
     @ti.func
-    def prefix_sum():
+    def prefix_sums():
         run = 0
         ti.loop_config(serialize=True)
         for c in range(n_cells):
             S.cell_start[c] = run
             S.cell_fill[c] = run
             run += S.cell_count[c]
+        ti.loop_config(serialize=True)
+        for s in range(n_slabs):
+            S.slab_start[s + 1] += S.slab_start[s]
+            S.slab_fill[s] = S.slab_start[s]
 
     @ti.func
     def scatter(n):
@@ -75,21 +85,25 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 S.sorted_idx[slot] = i
 
     @ti.func
-    def move_history(i, dst, src):
-        S.ft[i, dst] = S.ft[i, src]
-        if ti.static(rolling):
-            S.mr[i, dst] = S.mr[i, src]
-        if ti.static(hysteretic):
-            S.dmax[i, dst] = S.dmax[i, src]
+    def list_slabs(n):
+        ti.loop_config(serialize=True)  # index order within each slab, whatever the thread count
+        for i in range(n):
+            if S.active[i]:
+                s = S.slab[i]
+                S.slab_list[S.slab_fill[s]] = i
+                S.slab_fill[s] += 1
 
     @ti.func
     def build_rows(n):
         for i in range(n):
             if not S.active[i]:
-                S.nbr_n[i] = 0
+                S.nbr_count[i] = 0
                 continue
             xi = S.x[i]
             ri = S.radius[i]
+            si = S.slab[i]
+            ahead, behind = succ(si), pred(si)
+            ident = S.ident[i]
             c0 = cell_coord(xi)
             count = 0
             for dx, dy in ti.ndrange(span[0], span[1]):
@@ -114,12 +128,15 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         for s in range(S.cell_start[first], S.cell_start[last] + S.cell_count[last]):
                             # without a branch: write every candidate into the next free slot (the next one
                             # overwrites it unless it is kept), which spares the mispredicted jumps of an
-                            # unpredictable test (a third of the candidates are kept)
+                            # unpredictable test
                             j = S.sorted_idx[s]
                             d = min_image(S.x[j] - xi)
                             reach = ri + S.radius[j] + skin
+                            sj = S.slab[j]
+                            tie = (sj == si) | ((sj == ahead) & (sj == behind))
+                            owned = ti.select(tie, ident < S.ident[j], sj == ahead)
                             S.nbr_new[i, ti.min(count, K - 1)] = j
-                            count += ti.cast(d.norm_sqr() < reach * reach, ti.i32) * ti.cast(j != i, ti.i32)
+                            count += ti.cast(d.norm_sqr() < reach * reach, ti.i32) * ti.cast(owned, ti.i32)
             if count > K:
                 ti.atomic_max(S.overflow[0], count)
                 count = K
@@ -131,14 +148,52 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                     S.nbr_new[i, b + 1] = S.nbr_new[i, b]
                     b -= 1
                 S.nbr_new[i, b + 1] = key
-            # match partners with the old (sorted) row
+            S.nbr_count[i] = count
+            S.x_build[i] = xi
+            if ti.static(growth):
+                S.r_build[i] = S.radius[i]
+
+    @ti.func
+    def match_rows(n):
+        """src[i, k]: the new entry's slot in i's old row, -2 - its entry in the flip buffer when the
+        partner's old row held the pair, -1 for a new pair (step 3); reads the old rows only."""
+        S.flips[None] = 0
+        for i in range(n):
             n_old = S.nbr_n[i]
             a = 0
-            for k in range(count):
+            for k in range(S.nbr_count[i]):
                 j = S.nbr_new[i, k]
                 while a < n_old and S.nbr[i, a] < j:
                     a += 1
-                S.src[i, k] = a if (a < n_old and S.nbr[i, a] == j) else -1
+                found = a if (a < n_old and S.nbr[i, a] == j) else -1
+                if found < 0:
+                    for m in range(S.nbr_n[j]):
+                        if S.nbr[j, m] == i:  # the pair changed owner: its history, seen from i
+                            b = ti.atomic_add(S.flips[None], 1)
+                            if b < S.flip_ft.shape[0]:
+                                S.flip_ft[b] = -S.ft[j, m]
+                                if ti.static(rolling):
+                                    S.flip_mr[b] = -S.mr[j, m]
+                                if ti.static(hysteretic):
+                                    S.flip_dmax[b] = S.dmax[j, m]
+                                found = -2 - b
+                            else:
+                                ti.atomic_add(S.overflow[2], 1)
+                S.src[i, k] = found
+
+    @ti.func
+    def move_history(i, dst, src):
+        S.ft[i, dst] = S.ft[i, src]
+        if ti.static(rolling):
+            S.mr[i, dst] = S.mr[i, src]
+        if ti.static(hysteretic):
+            S.dmax[i, dst] = S.dmax[i, src]
+
+    @ti.func
+    def move_rows(n):
+        """Step 4: each row takes its new partners and their history (writes its own row only)."""
+        for i in range(n):
+            count = S.nbr_count[i]
             for kk in range(count):  # entries moving right, descending
                 k = count - 1 - kk
                 src = S.src[i, k]
@@ -149,57 +204,33 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 if src > k:
                     move_history(i, k, src)
             for k in range(count):
-                if S.src[i, k] < 0:
-                    S.ft[i, k] = ti.Vector([0.0, 0.0, 0.0])
+                src = S.src[i, k]
+                if src == -1:
+                    S.ft[i, k] = zero3
                     if ti.static(rolling):
-                        S.mr[i, k] = ti.Vector([0.0, 0.0, 0.0])
+                        S.mr[i, k] = zero3
                     if ti.static(hysteretic):
                         S.dmax[i, k] = 0.0
+                elif src < -1:
+                    b = -2 - src
+                    S.ft[i, k] = S.flip_ft[b]
+                    if ti.static(rolling):
+                        S.mr[i, k] = S.flip_mr[b]
+                    if ti.static(hysteretic):
+                        S.dmax[i, k] = S.flip_dmax[b]
                 S.nbr[i, k] = S.nbr_new[i, k]
             S.nbr_n[i] = count
-            S.x_build[i] = xi
-            if ti.static(growth):
-                S.r_build[i] = S.radius[i]
-
-    @ti.func
-    def count_below(i):
-        """The entries of row i with partners j < i."""
-        below = 0
-        for k in range(S.nbr_n[i]):
-            if S.nbr[i, k] < i:
-                below += 1
-        return below
-
-    @ti.func
-    def mirror_rows(n):
-        for i in range(n):
-            for k in range(S.nbr_n[i]):
-                j = S.nbr[i, k]
-                found = -1
-                if j > i:
-                    at = 0  # i's place in j's sorted row: the count of j's partners below i (no branch)
-                    for m in range(S.nbr_n[j]):
-                        at += ti.cast(S.nbr[j, m] < i, ti.i32)
-                    if at < S.nbr_n[j]:
-                        if S.nbr[j, at] == i:
-                            found = at
-                S.src[i, k] = found
-            S.split[i] = count_below(i)
-
-    @ti.kernel
-    def count_split(n: ti.i32):
-        """`split` from the rows alone (after a checkpoint restored them)."""
-        for i in range(n):
-            S.split[i] = count_below(i)
 
     @ti.kernel
     def rebuild(n: ti.i32):
         count_cells(n)
-        prefix_sum()
+        prefix_sums()
         scatter(n)
+        list_slabs(n)
         build_rows(n)
-        mirror_rows(n)
+        match_rows(n)
+        move_rows(n)
         for then in ti.static(after):
             then(n)
 
-    return rebuild, count_split
+    return rebuild

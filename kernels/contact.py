@@ -1,30 +1,26 @@
 """Contact forces and torques: particle-particle (from the Verlet list), plane walls and tubes.
 
-Each contact is evaluated once, by its lower-index particle, in two kernels with one thread
-per particle and no atomic sums (so runs are bit-reproducible whatever the thread count):
-1. `own_forces`: for each listed partner j > i inside contact range, the contact law
-   (`contact_laws.make_contact_response`) updates the pair's history in i's row and gives
-   the force F on i and the rolling moment M on i; both are also written into j's slot for i
-   (the mirror slot `src[i, k]`, found at the neighbour build), whose history arrays the
-   pair does not otherwise use. A partner j > i out of range has its history cleared. Walls
-   and tubes are done here too.
-   For a touching pair own_forces also stamps j's `src` slot for i (-1 from the neighbour build
-   on, unused there) with its step number `stamp`.
-2. `partner_forces`: for each listed partner j < i whose slot carries this step's stamp, i reads
-   its own slot: force -F, torque -r_i n x F - M (n the unit normal from i to j; Newton's third
-   law for the force, and the contact point r_i n on i's side). It takes the positions from
-   `xf`, where own_forces copied them, so the kick can run it while other particles already
-   move on (`kernels/integrate.py`), and it computes no geometry for pairs apart.
-With heat, own_forces also evaluates each pair's conduction (contact spot and gas lens) once
-and writes minus the heat flow into i to `qpair[j, mirror]`, which partner_forces adds for
-every partner j < i. The overlap check and the contact count are computed in both passes,
-each for its own side of the row. Against the full list evaluated twice (one law per listed pair
-and side) this makes the force step 1.3x faster on the peer benchmark bed.
+Each pair is listed once, in the row of its owner (`kernels/broadphase.py`), and evaluated there:
+the contact law (`contact_laws.make_contact_response`) updates the pair's history in the owner's
+row and gives the force F and rolling moment M on the owner i; the partner j receives -F and the
+torque r_j n x F - M (n the unit normal from i to j: Newton's third law, the contact point r_j n
+from j). Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
+owner's slab or in the next one, so
+1. `even_pass`: each even slab s, one thread per slab, clears the sums of slabs s and s + 1 and
+   sweeps s in index order (its pairs, walls and tubes);
+2. `odd_pass`: each odd slab likewise, then, when the step goes on, integrates (`then`) the
+   particles of that slab and the next: their sums are complete (each receives only from its own
+   slab and the one before);
+no two threads then write the same particle and every sum is taken in the same order whatever the
+thread count: float64 runs are bit-reproducible without atomics. Each particle is read and written
+about once per step, which is what the large beds, whose fields do not fit in cache, wait on. With
+`atomic` (a GPU, where a slab per thread would leave it idle) every particle of a pass is a thread
+of its own and the sums are atomic: the same forces, summed in an order that varies from run to run.
+With heat the same pair evaluation adds its conduction (contact spot and gas lens) to both
+particles' heat flows.
 
-With numerics.precision = 'mixed' the row fields (ft, mr, dmax, qpair) are float32: what the loop
-reads from them is widened to float64 (`wide`), and the force, rolling moment and heat flow handed
-to the partner are rounded to float32 once (`handed`) and used by both partners (the owner's torque
-then takes the handed force), so momentum and heat are still conserved to the float64 sums' rounding.
+With numerics.precision = 'mixed' the row fields (ft, mr, dmax) are float32: what the loop reads
+from them is widened to float64 (`wide`) and what it stores is rounded once; the sums stay float64.
 
 Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is
 a plane with a velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Wall and tube contacts
@@ -44,25 +40,33 @@ from types import SimpleNamespace
 import taichi as ti
 
 from .contact_laws import make_contact_response
-from .geometry import make_geometry
+from .geometry import make_geometry, make_slabs, slab_layout
 from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radiation
+
+# Loop iterations per worker in the slab loops. Taichi's CPU runtime (1.7) runs a parallel loop of fewer
+# than about a thousand iterations on one thread and splits a longer one into one block of consecutive
+# iterations per thread: a loop of SPREAD iterations per thread, of which the first of each block does
+# the work of one worker, gives each thread one worker, and each worker takes every T-th slab of the
+# pass (T threads): neighbouring slabs, which hold about as much work, go to different threads.
+SPREAD = 1024
 
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
                       track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
-                      surface_reach: float = 0.0, grain_scale: float = 1.0):
-    """Return a namespace of the two passes: kernels `own(n, t, dt, stamp, conduct, diag)` and `partner(n, t)`
-    (None without pairs); and as Taichi funcs, for kernels that fuse them with the rest of the step
-    (`kernels/integrate.py`), `own_pass(n, t, dt, stamp, conduct, diag)`, the body of `own`, and
-    `gather(i, t)`, the partner pass for one particle. With heat, `conduct` = m > 0 evaluates the
-    conduction and books the heat of m steps (q[i] = m x the heat flow: heat.conduction_interval = m
-    evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
-    0; the surfaces' heat flows of the last evaluation hold); S.conduct[None] tells the partner pass
-    and the kick. `diag` = 1 also fills ovl and ncontact (module docstring; S.diag[None] tells the partner pass).
+                      surface_reach: float = 0.0, grain_scale: float = 1.0, atomic: bool | None = None):
+    """Return a namespace of the kernel `forces(n, t, dt, conduct, diag)` (both passes), the Taichi
+    funcs `even_pass(n, t, dt, conduct, diag)` and, from `odd_pass(then)`, `odd(n, t, dt, conduct, diag,
+    drift, kick)`, which calls the Taichi func then(i, t, dt, drift, kick) on every particle whose sums
+    are complete (`kernels/integrate.py` fuses the kick with them); `finish(i, t)` (the
+    contact times, None without them) and `mark_near(n)` (below). With heat, `conduct` = m > 0 evaluates
+    the conduction and books the heat of m steps (q[i] = m x the heat flow: heat.conduction_interval =
+    m evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
+    0; the surfaces' heat flows of the last evaluation hold); S.conduct[None] tells the kick. `diag` = 1
+    also fills ovl and ncontact (module docstring).
     `single_material` loads the pair parameters once per particle; `heat` adds conduction
-    (kernels/heat.py) to the same loop, writing q[i] [W] and the heat flow into each surface with a
+    (kernels/heat.py) to the same loop, adding to q [W] and the heat flow into each surface with a
     temperature, surf_rate[s] [W] (into the bed > 0), and with `angle_bins` the heat flow from each tube
     by angle omega of the contact point from the top of the tube, tube_bin_rate[k, b] (omega =
     atan2(side, up), 0 = top, 180 deg = bottom). `fluid_layer` > 0 adds particle-fluid-particle
@@ -78,7 +82,16 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     build, as marked in S.near by the Taichi func `mark_near(n)` (None without culling; the neighbour
     build runs it); a particle far from every wall and tube then costs no surface evaluation at all.
     `grain_scale` k > 1: every particle is a parcel of k^3 grains (one k per scene with heat) and
-    conducts as those grains do (kernels/heat.py)."""
+    conducts as those grains do (kernels/heat.py). `atomic`: atomic sums, one thread per particle
+    (module docstring); None: on any architecture but the CPU."""
+    if atomic is None:
+        atomic = ti.lang.impl.current_cfg().arch != ti.cpu or bool(__import__("os").environ.get("TIDEM_ATOMIC"))
+    flat = atomic or not pairs  # one loop over the particles, no slabs
+    n_slabs, _slab_of, succ, _pred = make_slabs(grid)
+    axis, _count = slab_layout(grid)
+    n_odd = n_slabs // 2
+    lone_first = 0 if grid.periodic[axis] and n_slabs >= 2 else 1  # slab 0 follows no odd slab
+    workers = max(1, ti.lang.impl.current_cfg().cpu_max_num_threads)
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
@@ -94,16 +107,6 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     def wide(v):
         """A value read from the rows, in the kernels' float type."""
         return ti.cast(v, fp)
-
-    @ti.func
-    def handed(v):
-        """v rounded to the rows' float type, as the partner will read it (float32 with
-        numerics.precision = 'mixed'): both partners then add the very same force, moment and heat
-        flow, so that momentum and heat stay conserved to the float64 sums' rounding."""
-        out = v
-        if ti.static(hist != fp):
-            out = ti.cast(v, hist)
-        return out
 
     @ti.func
     def lens(p, r_eff, gap, delta_f):
@@ -224,14 +227,201 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.func
-    def own_pass(n, t, dt, stamp, conduct, diag):
-        """The body of `own_forces`: a Taichi func, so that a kernel can run it and the kick in one launch
-        (`kernels/integrate.py`)."""
+    def add(field: ti.template(), j, value):
+        """field[j] += value: a plain load and store where one thread owns j in this pass (slabs; Taichi
+        would make `field[j] += value` with an index it cannot prove private an atomic, a
+        compare-and-swap loop per float, 20 ns a pair on the peer bed), else atomic."""
+        if ti.static(atomic):
+            ti.atomic_add(field[j], value)
+        else:
+            field[j] = field[j] + value
+
+    @ti.func
+    def raise_to(field: ti.template(), j, value):
+        """field[j] = max(field[j], value), as `add`."""
+        if ti.static(atomic):
+            ti.atomic_max(field[j], value)
+        else:
+            field[j] = ti.max(field[j], value)
+
+    @ti.func
+    def clear(i, diag):
+        """Zero particle i's sums before a force evaluation."""
+        S.f[i] = zero3
+        S.tq[i] = zero3
+        if ti.static(heat):
+            S.q[i] = 0.0
+        if diag:
+            S.ovl[i] = 0.0
+            S.ncontact[i] = 0
+
+    @ti.func
+    def visit(i, t, dt, conduct, diag):
+        """Particle i's pairs (adding the reactions to the partners), walls and tubes, and gravity."""
+        xi = S.x[i]
+        ri = S.radius[i]
+        mi = S.mass[i]
+        wi = S.w[i]
+        vi = S.v[i]
+        mat_i = S.mat[i]
+        force = mi * g
+        torque = zero3
+        worst = 0.0
+        touching = 0
+        heat_in = 0.0
+        p_same = S.pp[0, 0]
+        if ti.static(pairs):  # contact.model = 'none' compiles no pair loop
+            for k in range(S.nbr_n[i]):
+                j = S.nbr[i, k]
+                d, rj, rsum, dist2 = separation(xi, ri, j, S.x)
+                if dist2 < rsum * rsum:
+                    nrm, dist = unit_normal(d, dist2, rsum)
+                    delta = rsum - dist
+                    wj = S.w[j]
+                    v_rel = vi - S.v[j] + (ri * wi + rj * wj).cross(nrm)
+                    mj = S.mass[j]
+                    share = 1.0 / ((mi + mj) * rsum)  # one division for m* = mi mj / (mi + mj) and R*
+                    m_eff = mi * mj * rsum * share
+                    r_eff = ri * rj * (mi + mj) * share
+                    i_roll = 0.0
+                    if ti.static(rolling):
+                        ai = 1.4 * mi * ri * ri
+                        aj = 1.4 * mj * rj * rj
+                        i_roll = ai * aj / (ai + aj)
+                    dmax = 0.0
+                    if ti.static(hysteretic):
+                        dmax = wide(S.dmax[i, k])
+                    mr = zero3
+                    if ti.static(rolling):
+                        mr = wide(S.mr[i, k])
+                    f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                        nrm, delta, v_rel, wi - wj, m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
+                        pair_params(mat_i, j, p_same), wide(S.ft[i, k]), mr, dmax, dt)
+                    force += f
+                    torque += (ri * nrm).cross(f_t) + m_roll
+                    add(S.f, j, -f)
+                    add(S.tq, j, (rj * nrm).cross(f_t) - m_roll)
+                    S.ft[i, k] = ti.cast(xi_new, hist)
+                    if ti.static(rolling):
+                        S.mr[i, k] = ti.cast(mr_new, hist)
+                    if ti.static(hysteretic):
+                        S.dmax[i, k] = ti.cast(dmax_new, hist)
+                    if ti.static(heat):
+                        if conduct:
+                            flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj)
+                            heat_in += flow
+                            add(S.q, j, -conduct * flow)
+                    if diag:
+                        share_ovl = delta / ti.min(ri, rj)
+                        worst = ti.max(worst, share_ovl)
+                        touching += 1
+                        raise_to(S.ovl, j, share_ovl)
+                        add(S.ncontact, j, 1)
+                else:
+                    if ti.static(pfp):
+                        if conduct:
+                            flow = lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2)
+                            heat_in += flow
+                            add(S.q, j, -conduct * flow)
+                    S.ft[i, k] = zero3
+                    if ti.static(rolling):
+                        S.mr[i, k] = zero3
+                    if ti.static(hysteretic):
+                        S.dmax[i, k] = 0.0
+        held = S.wmask[i]  # bit s set: surface s has a history slot
+        nearby = S.near[i] if ti.static(cull) else 0
+        for s in ti.static(range(n_surf)):
+            near = 1
+            if ti.static(cull >> s & 1):
+                near = (nearby >> s) & 1  # surfaces out of reach at the last neighbour build
+            if near:
+                delta, nrm, u = surface_contact(i, s, t)
+                slot = -1
+                if (held >> s) & 1:
+                    for q in range(W):
+                        if S.wid[i, q] == s:
+                            slot = q
+                if delta > 0.0:
+                    if slot < 0:
+                        for q in range(W):
+                            if slot < 0 and S.wid[i, q] < 0:
+                                slot = q
+                                S.wid[i, q] = s
+                                held |= 1 << s
+                                S.wft[i, q] = zero3
+                                if ti.static(rolling):
+                                    S.wmr[i, q] = zero3
+                                if ti.static(hysteretic):
+                                    S.wdmax[i, q] = 0.0
+                    if slot < 0:
+                        ti.atomic_add(S.overflow[1], 1)
+                    else:
+                        v_rel = vi - u + (ri * wi).cross(nrm)
+                        dmax = 0.0
+                        if ti.static(hysteretic):
+                            dmax = S.wdmax[i, slot]
+                        mr = zero3
+                        if ti.static(rolling):
+                            mr = S.wmr[i, slot]
+                        f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                            nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
+                            S.ps[mat_i, s], S.wft[i, slot], mr, dmax, dt)
+                        force += f
+                        torque += (ri * nrm).cross(f_t) + m_roll
+                        S.wft[i, slot] = xi_new
+                        if ti.static(heat):
+                            if conduct and S.surf_T[s] > 0.0:
+                                b = tube_bin(s, nrm)
+                                t_wall = wall_temperature(s, b)
+                                flow = wall_conductance(S.ps[mat_i, s], ri, delta, cg) * (t_wall - S.T[i])
+                                if ti.static(radiation):
+                                    flow += wall_radiation(S.ps[mat_i, s], ri, t_wall, S.T[i])
+                                heat_in += flow
+                                surface_heat(s, b, flow)
+                        if ti.static(rolling):
+                            S.wmr[i, slot] = mr_new
+                        if ti.static(hysteretic):
+                            S.wdmax[i, slot] = dmax_new
+                        if diag:
+                            worst = ti.max(worst, delta / ri)
+                            touching += 1
+                else:
+                    if slot >= 0:
+                        S.wid[i, slot] = -1
+                        held &= ~(1 << s)
+                    if ti.static(pfp):
+                        if conduct and -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
+                            b = tube_bin(s, nrm)
+                            flow = cg * lens(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
+                                wall_temperature(s, b) - S.T[i])
+                            heat_in += flow
+                            surface_heat(s, b, flow)
+        S.wmask[i] = held
+        add(S.f, i, force)
+        add(S.tq, i, torque)
+        if ti.static(heat):
+            add(S.q, i, conduct * heat_in)  # the heat of `conduct` steps, and none between evaluations
+        if diag:
+            raise_to(S.ovl, i, worst)
+            add(S.ncontact, i, touching)
+
+    @ti.func
+    def clear_slab(s, diag):
+        for p in range(S.slab_start[s], S.slab_start[s + 1]):
+            clear(S.slab_list[p], diag)
+
+    @ti.func
+    def sweep_slab(s, t, dt, conduct, diag):
+        for p in range(S.slab_start[s], S.slab_start[s + 1]):
+            visit(S.slab_list[p], t, dt, conduct, diag)
+
+    @ti.func
+    def even_pass(n, t, dt, conduct, diag):
+        """Pass 1 (module docstring): the even slabs, or with `flat` every particle."""
         if ti.static(track_contact_time):
             diag = 1  # the contact times need the count in every pass
-        S.diag[None] = diag  # for the partner pass
         if ti.static(heat):
-            S.conduct[None] = conduct  # for the partner pass and the kick
+            S.conduct[None] = conduct  # for the kick
             if conduct:  # else the surfaces' heat flows of the last evaluation hold
                 ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
                 for s in range(n_surf):
@@ -240,170 +430,79 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     ti.loop_config(serialize=True)
                     for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                         S.tube_bin_rate[k, b] = 0.0
-        S.stamp[None] = stamp  # for the partner pass
-        for i in range(n):
-            if S.active[i]:
-                xi = S.x[i]
-                S.xf[i] = xi  # for the partner pass
-                ri = S.radius[i]
-                mi = S.mass[i]
-                wi = S.w[i]
-                vi = S.v[i]
-                mat_i = S.mat[i]
-                force = mi * g
-                torque = zero3
-                worst = 0.0
-                touching = 0
-                heat_in = 0.0
-                p_same = S.pp[0, 0]
-                if ti.static(pairs):  # contact.model = 'none' compiles no pair loop
-                    for k in range(S.split[i], S.nbr_n[i]):  # the partners j > i (j < i: partner_forces)
-                        j = S.nbr[i, k]
-                        mirror = S.src[i, k]  # -1 only in a row cut by overflow, which stops the run
-                        d, rj, rsum, dist2 = separation(xi, ri, j, S.x)
-                        if dist2 < rsum * rsum:
-                            nrm, dist = unit_normal(d, dist2, rsum)
-                            delta = rsum - dist
-                            v_rel = vi - S.v[j] + (ri * wi + rj * S.w[j]).cross(nrm)
-                            mj = S.mass[j]
-                            share = 1.0 / ((mi + mj) * rsum)  # one division for m* = mi mj / (mi + mj) and R*
-                            m_eff = mi * mj * rsum * share
-                            r_eff = ri * rj * (mi + mj) * share
-                            i_roll = 0.0
-                            if ti.static(rolling):
-                                ai = 1.4 * mi * ri * ri
-                                aj = 1.4 * mj * rj * rj
-                                i_roll = ai * aj / (ai + aj)
-                            dmax = 0.0
-                            if ti.static(hysteretic):
-                                dmax = wide(S.dmax[i, k])
-                            mr = zero3
-                            if ti.static(rolling):
-                                mr = wide(S.mr[i, k])
-                            f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                                nrm, delta, v_rel, wi - S.w[j], m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
-                                pair_params(mat_i, j, p_same), wide(S.ft[i, k]), mr, dmax, dt)
-                            f = handed(f)
-                            m_roll = handed(m_roll)
-                            force += f
-                            if ti.static(hist != fp):  # the force j receives: both spins from one value
-                                f_t = f
-                            torque += (ri * nrm).cross(f_t) + m_roll
-                            S.ft[i, k] = ti.cast(xi_new, hist)
-                            if mirror >= 0:  # handed to j: the force on i, and the pair touches now
-                                S.ft[j, mirror] = ti.cast(f, hist)
-                                S.src[j, mirror] = stamp
-                                if ti.static(rolling):
-                                    S.mr[j, mirror] = ti.cast(m_roll, hist)
-                            if ti.static(heat):
-                                if conduct:
-                                    flow = handed(touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj))
-                                    heat_in += flow
-                                    if mirror >= 0:
-                                        S.qpair[j, mirror] = ti.cast(-flow, hist)
-                            if ti.static(rolling):
-                                S.mr[i, k] = ti.cast(mr_new, hist)
-                            if ti.static(hysteretic):
-                                S.dmax[i, k] = ti.cast(dmax_new, hist)
-                            if diag:
-                                worst = ti.max(worst, delta / ti.min(ri, rj))
-                                touching += 1
-                        else:
-                            if ti.static(heat):
-                                if conduct:
-                                    flow = 0.0
-                                    if ti.static(pfp):
-                                        flow = handed(lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist2))
-                                    heat_in += flow
-                                    if mirror >= 0:
-                                        S.qpair[j, mirror] = ti.cast(-flow, hist)
-                            S.ft[i, k] = zero3
-                            if ti.static(rolling):
-                                S.mr[i, k] = zero3
-                            if ti.static(hysteretic):
-                                S.dmax[i, k] = 0.0
-                held = S.wmask[i]  # bit s set: surface s has a history slot
-                nearby = S.near[i] if ti.static(cull) else 0
-                for s in ti.static(range(n_surf)):
-                    near = 1
-                    if ti.static(cull >> s & 1):
-                        near = (nearby >> s) & 1  # surfaces out of reach at the last neighbour build
-                    if near:
-                        delta, nrm, u = surface_contact(i, s, t)
-                        slot = -1
-                        if (held >> s) & 1:
-                            for q in range(W):
-                                if S.wid[i, q] == s:
-                                    slot = q
-                        if delta > 0.0:
-                            if slot < 0:
-                                for q in range(W):
-                                    if slot < 0 and S.wid[i, q] < 0:
-                                        slot = q
-                                        S.wid[i, q] = s
-                                        held |= 1 << s
-                                        S.wft[i, q] = zero3
-                                        if ti.static(rolling):
-                                            S.wmr[i, q] = zero3
-                                        if ti.static(hysteretic):
-                                            S.wdmax[i, q] = 0.0
-                            if slot < 0:
-                                ti.atomic_add(S.overflow[1], 1)
-                            else:
-                                v_rel = vi - u + (ri * wi).cross(nrm)
-                                dmax = 0.0
-                                if ti.static(hysteretic):
-                                    dmax = S.wdmax[i, slot]
-                                mr = zero3
-                                if ti.static(rolling):
-                                    mr = S.wmr[i, slot]
-                                f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                                    nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
-                                    S.ps[mat_i, s], S.wft[i, slot], mr, dmax, dt)
-                                force += f
-                                torque += (ri * nrm).cross(f_t) + m_roll
-                                S.wft[i, slot] = xi_new
-                                if ti.static(heat):
-                                    if conduct and S.surf_T[s] > 0.0:
-                                        b = tube_bin(s, nrm)
-                                        t_wall = wall_temperature(s, b)
-                                        flow = wall_conductance(S.ps[mat_i, s], ri, delta, cg) * (t_wall - S.T[i])
-                                        if ti.static(radiation):
-                                            flow += wall_radiation(S.ps[mat_i, s], ri, t_wall, S.T[i])
-                                        heat_in += flow
-                                        surface_heat(s, b, flow)
-                                if ti.static(rolling):
-                                    S.wmr[i, slot] = mr_new
-                                if ti.static(hysteretic):
-                                    S.wdmax[i, slot] = dmax_new
-                                if diag:
-                                    worst = ti.max(worst, delta / ri)
-                                    touching += 1
-                        else:
-                            if slot >= 0:
-                                S.wid[i, slot] = -1
-                                held &= ~(1 << s)
-                            if ti.static(pfp):
-                                if conduct and -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
-                                    b = tube_bin(s, nrm)
-                                    flow = cg * lens(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
-                                        wall_temperature(s, b) - S.T[i])
-                                    heat_in += flow
-                                    surface_heat(s, b, flow)
-                S.wmask[i] = held
-                S.f[i] = force
-                S.tq[i] = torque
-                if ti.static(heat):
-                    S.q[i] = conduct * heat_in  # the heat of `conduct` steps, and none between evaluations
-                if diag:
-                    S.ovl[i] = worst
-                    S.ncontact[i] = touching
-                if ti.static(not pairs):
-                    note_contact_time(i, touching, t)
+        if ti.static(not pairs):
+            for i in range(n):
+                if S.active[i]:
+                    clear(i, diag)
+                    visit(i, t, dt, conduct, diag)
+        elif ti.static(atomic):
+            for i in range(n):
+                if S.active[i]:
+                    clear(i, diag)
+            for i in range(n):
+                if S.active[i]:
+                    visit(i, t, dt, conduct, diag)
+        else:
+            for e in range(workers * SPREAD):
+                if e % SPREAD == 0:
+                    for r in range((n_slabs - n_odd - 1 - e // SPREAD) // workers + 1):  # every workers-th
+                        s = 2 * (e // SPREAD + r * workers)
+                        clear_slab(s, diag)
+                        after = succ(s)
+                        if after >= 0 and after != s:
+                            clear_slab(after, diag)
+                        sweep_slab(s, t, dt, conduct, diag)
+
+    def odd_pass(then=None):
+        """Pass 2 (module docstring) as a Taichi func odd(n, t, dt, conduct, diag, drift, kick) that
+        calls the Taichi func then(i, t, dt, drift, kick) on every particle once its sums are complete
+        and keeps the largest value it returns in S.max_disp[None] (the squared displacements of the
+        kick-drifts): one atomic per slab, not one per particle."""
+        kicks = then is not None
+
+        @ti.func
+        def integrate_slab(s, t, dt, drift, kick):
+            largest = 0.0
+            for p in range(S.slab_start[s], S.slab_start[s + 1]):
+                largest = ti.max(largest, then(S.slab_list[p], t, dt, drift, kick))
+            return largest
+
+        @ti.func
+        def odd(n, t, dt, conduct, diag, drift, kick):
+            if ti.static(track_contact_time):
+                diag = 1
+            if ti.static(flat):
+                if ti.static(kicks):
+                    for i in range(n):
+                        if S.active[i]:
+                            ti.atomic_max(S.max_disp[None], then(i, t, dt, drift, kick))
+            else:
+                for e in range(workers * SPREAD):
+                    if e % SPREAD == 0:
+                        largest = 0.0
+                        for r in range((n_odd + lone_first - 1 - e // SPREAD) // workers + 1):
+                            m = e // SPREAD + r * workers
+                            if m < n_odd:
+                                s = 2 * m + 1
+                                sweep_slab(s, t, dt, conduct, diag)
+                                if ti.static(kicks):
+                                    largest = ti.max(largest, integrate_slab(s, t, dt, drift, kick))
+                                    after = succ(s)
+                                    if after >= 0:
+                                        largest = ti.max(largest, integrate_slab(after, t, dt, drift, kick))
+                            elif ti.static(kicks):
+                                largest = ti.max(largest, integrate_slab(0, t, dt, drift, kick))
+                        if ti.static(kicks):
+                            ti.atomic_max(S.max_disp[None], largest)
+
+        return odd
+
+    forces_only = odd_pass()
 
     @ti.kernel
-    def own_forces(n: ti.i32, t: float, dt: float, stamp: ti.i32, conduct: ti.i32, diag: ti.i32):
-        own_pass(n, t, dt, stamp, conduct, diag)
+    def forces(n: ti.i32, t: float, dt: float, conduct: ti.i32, diag: ti.i32):
+        even_pass(n, t, dt, conduct, diag)
+        forces_only(n, t, dt, conduct, diag, 0, 0)
 
     @ti.func
     def mark_near_surfaces(n):
@@ -420,56 +519,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 S.near[i] = bits
 
     @ti.func
-    def gather_partners(i, t):
-        """Add to particle i what its partners j < i handed over in own_forces (body of partner_forces),
-        at the positions of the force pass (`xf`), so that it may run while particles move on."""
-        xi = S.xf[i]
-        ri = S.radius[i]
-        force = zero3
-        torque = zero3
-        heat_in = 0.0
-        diag = S.diag[None]
-        worst = 0.0
-        touching = 0
-        if diag:
-            worst = S.ovl[i]
-            touching = S.ncontact[i]
-        stamp = S.stamp[None]
-        conduct = 0
-        if ti.static(heat):
-            conduct = S.conduct[None]
-        if ti.static(pairs):
-            for k in range(S.split[i]):  # the partners j < i (the row is sorted; the rest was done in own_forces)
-                j = S.nbr[i, k]
-                if ti.static(heat):
-                    if conduct:
-                        heat_in += S.qpair[i, k]  # written by j in own_forces
-                if S.src[i, k] == stamp:  # j found the pair touching in this force pass
-                    d, rj, rsum, dist2 = separation(xi, ri, j, S.xf)
-                    nrm, dist = unit_normal(d, dist2, rsum)
-                    delta = rsum - dist
-                    f_j = S.ft[i, k]  # force on j, written by j in own_forces
-                    force -= f_j
-                    torque -= (ri * nrm).cross(f_j)
-                    if ti.static(rolling):
-                        torque -= S.mr[i, k]
-                    if diag:
-                        worst = ti.max(worst, delta / ti.min(ri, rj))
-                        touching += 1
-            S.f[i] += force
-            S.tq[i] += torque
-            if ti.static(heat):
-                S.q[i] += conduct * heat_in
-            if diag:
-                S.ovl[i] = worst
-                S.ncontact[i] = touching
-            note_contact_time(i, touching, t)
+    def finish(i, t):
+        """The contact times of particle i, from its complete contact count."""
+        note_contact_time(i, S.ncontact[i], t)
 
-    @ti.kernel
-    def partner_forces(n: ti.i32, t: float):
-        for i in range(n):
-            if S.active[i]:
-                gather_partners(i, t)
-
-    return SimpleNamespace(own=own_forces, own_pass=own_pass, partner=partner_forces if pairs else None,
-                           gather=gather_partners, mark_near=mark_near_surfaces if cull else None)
+    return SimpleNamespace(forces=forces, even_pass=even_pass, odd_pass=odd_pass,
+                           finish=finish if track_contact_time else None, mark_near=mark_near_surfaces if cull else None)

@@ -185,10 +185,11 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
 
     @ti.func
     def gas_force(i, t):
-        """Drag, pressure-gradient force and gas heat exchange of particle i (t unused)."""
-        S.f[i] += S.gK[i] * (S.gu[i] - S.v[i]) - volume(i) * S.ggp[i]
+        """Drag, pressure-gradient force and gas heat exchange of particle i (t unused). Plain stores: the
+        kick may take i from a slab list, where `S.f[i] += ...` would be an atomic (`kernels/contact.py`)."""
+        S.f[i] = S.f[i] + S.gK[i] * (S.gu[i] - S.v[i]) - volume(i) * S.ggp[i]
         if ti.static(heat):
-            S.q[i] += S.gH[i] * (S.gT[i] - S.T[i])
+            S.q[i] = S.q[i] + S.gH[i] * (S.gT[i] - S.T[i])
 
     @ti.kernel
     def add_gas_forces(n: ti.i32):

@@ -14,13 +14,15 @@ class Grid:
     """Uniform cell grid over the domain.
 
     lo, length: domain corner and extents [m]; periodic: per axis; cells: cell counts per
-    axis; cell_size: per axis [m] (>= the largest interaction range).
+    axis; cell_size: per axis [m] (>= the largest interaction range); slab_axis: the axis the
+    contact pass cuts into slabs (`slab_layout`, `slab_axis_for`).
     """
 
     lo: tuple[float, float, float]
     length: tuple[float, float, float]
     periodic: tuple[bool, bool, bool]
     cells: tuple[int, int, int]
+    slab_axis: int = 0
 
     @property
     def cell_size(self) -> tuple[float, float, float]:
@@ -72,3 +74,57 @@ def make_geometry(grid: Grid):
         return (c[0] * cells[1] + c[1]) * cells[2] + c[2]
 
     return min_image, wrap, cell_coord, cell_id
+
+
+def slab_axis_for(cells, gravity) -> int:
+    """The axis to cut into slabs: the one with the most cells across gravity (a bed is about as
+    dense everywhere across it, while along gravity it may fill the lower part only), or the one
+    along gravity where that has at least twice as many."""
+    down = max(range(3), key=lambda a: abs(gravity[a])) if any(gravity) else None
+    axis = max((a for a in range(3) if a != down), key=lambda a: cells[a])
+    return down if down is not None and cells[down] >= 2 * cells[axis] else axis
+
+
+def slab_layout(grid: Grid) -> tuple[int, int]:
+    """(axis, count) of the slabs that the contact pass sweeps (`kernels/contact.py`): the grid's
+    slab axis cut into as many slabs as it has cells, rounded down to an even number (one slab for a
+    single cell). A slab is at least a cell wide, so a listed pair's particles lie in the same slab
+    or in neighbouring ones. The layout depends on the grid only (never on the thread count), so the
+    sums, and a float64 run, are the same on any number of threads."""
+    cells = grid.cells[grid.slab_axis]
+    return grid.slab_axis, (cells - cells % 2 if cells >= 2 else 1)
+
+
+def make_slabs(grid: Grid):
+    """Return (count, slab_of, succ, pred): the slab count of `slab_layout` and Taichi funcs for the
+    slab of a position and the slab after and before slab s along the axis (wrapped on a periodic
+    axis; -1 past the ends of an open one)."""
+    axis, count = slab_layout(grid)
+    lo = grid.lo[axis]
+    inv_width = count / grid.length[axis]
+    periodic = grid.periodic[axis]
+
+    @ti.func
+    def slab_of(x):
+        s = ti.cast(ti.floor((x[axis] - lo) * inv_width), ti.i32)
+        if ti.static(periodic):
+            s = s % count
+        return ti.min(ti.max(s, 0), count - 1)
+
+    @ti.func
+    def succ(s):
+        t = s + 1
+        if ti.static(periodic):
+            t = t % count
+        elif t >= count:
+            t = -1
+        return t
+
+    @ti.func
+    def pred(s):
+        t = s - 1
+        if ti.static(periodic):
+            t = (t + count) % count
+        return t
+
+    return count, slab_of, succ, pred

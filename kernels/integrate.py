@@ -9,7 +9,8 @@ Step n -> n+1 (as in LAMMPS' fix nve/sphere):
 exceeds half the skin. When the host needs nothing between two steps, `kick(..., drift=1)` goes
 on with the next step's kick-drift for each particle in the same loop, which saves a kernel
 launch and a pass over the particles; the operations are those of the two kernels, in the same order, and the result is
-bit-identical (the partner pass reads the positions of the force pass, `kernels/contact.py`). With
+bit-identical (a slab's particles move on only when no pair left to evaluate reads them,
+`kernels/contact.py`). With
 growing particles the radius gained since the build counts as displacement (a pair's gap
 closes by both moves and both growths, so max(move + growth) <= skin / 2 keeps the list valid).
 """
@@ -21,19 +22,20 @@ from .geometry import make_geometry
 
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
                      growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None):
-    """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, stamp,
-    conduct, diag, drift, kick)). Each leaves in S.max_disp[None] the largest squared displacement since the last neighbour build
+    """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, conduct,
+    diag, drift, kick)). Each leaves in S.max_disp[None] the largest squared displacement since the last neighbour build
     (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
     drift: 0 or 1; a kernel's return value would cost the host more than reading the field).
     With heat, `kick` also advances temperatures explicitly, T += dt q / (m c), and the heat
     delivered by each surface, E_s += dt q_s.
     `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
-    (the partner pass of the contact forces, the gas forces); `kick` calls them on each particle
-    first, which saves a kernel launch and a pass over the particles per step.
-    `forces`: a Taichi func forces(n, t, dt, stamp, conduct, diag) (the contacts' own pass, `kernels/contact.py`);
-    `forces_and_kick` runs it and then the kick in one kernel launch: one Python call and one
-    wake-up of the thread pool less per step (None without `forces`); with kick = 0 it only
-    evaluates the forces (the run's first evaluation, so that no other kernel compiles them).
+    (the gas forces, the contact times); `kick` calls them on each particle first, which saves a
+    kernel launch and a pass over the particles per step.
+    `forces`: the contact passes of `kernels/contact.make_force_kernel`; `forces_and_kick` runs
+    them and kicks each particle as soon as its sums are complete, in the second pass, so that a
+    step is two passes over the particles in one kernel launch (None without `forces`); with kick
+    = 0 it only evaluates the forces (the run's first evaluation, so that no other kernel compiles
+    them). The surfaces' heat and foils advance after the particles (they only read the flows).
 
     With `foil`, each heated-foil tube k (tube_foil[k] = (q_el, C_A, A_bin, G / ds^2), q_el > 0)
     advances its foil temperature per angle bin b with the same flows the particles received:
@@ -118,35 +120,43 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                     S.plane_foil_T[s] += dt / foil_s[1] * (foil_s[0] - S.surf_rate[s] / foil_s[2])
 
     @ti.func
-    def kick_pass(n, t, dt, drift, kick):
-        """The body of `kick` (a Taichi func, so that `forces_and_kick` can run it after the forces);
-        kick = 0 only finishes the forces (`before_kick`), as the first force evaluation needs."""
-        S.max_disp[None] = 0.0
+    def kick_particle(i, t, dt, drift, kick):
+        """Finish particle i's force (`before_kick`) and, with kick = 1, kick it, and with drift = 1 go on
+        with its next kick-drift; kick = 0 only finishes the forces, as the first force evaluation needs.
+        Returns the squared displacement of the kick-drift (0 without)."""
+        moved2 = 0.0
+        for finish in ti.static(before_kick):
+            finish(i, t)
         if kick:
-            advance_surfaces(dt)
-        for i in range(n):
-            if S.active[i]:
-                for finish in ti.static(before_kick):
-                    finish(i, t)
-                if kick:
-                    S.v[i] += 0.5 * dt * S.f[i] * S.inv_mass[i]
-                    S.w[i] += 0.5 * dt * S.tq[i] * S.inv_inertia[i]
-                    if ti.static(heat):
-                        S.T[i] += dt * S.q[i] * S.inv_heat_cap[i]
-                    if drift:
-                        ti.atomic_max(S.max_disp[None], drift_particle(i, dt, drift >> 1))
+            # plain stores: i may come from a slab list, and Taichi makes `S.v[i] += ...` with such an
+            # index an atomic (`kernels/contact.py`, add)
+            S.v[i] = S.v[i] + 0.5 * dt * S.f[i] * S.inv_mass[i]
+            S.w[i] = S.w[i] + 0.5 * dt * S.tq[i] * S.inv_inertia[i]
+            if ti.static(heat):
+                S.T[i] = S.T[i] + dt * S.q[i] * S.inv_heat_cap[i]
+            if drift:
+                moved2 = drift_particle(i, dt, drift >> 1)
+        return moved2
 
     @ti.kernel
     def kick(n: ti.i32, t: float, dt: float, drift: ti.i32):
-        kick_pass(n, t, dt, drift, 1)
+        S.max_disp[None] = 0.0
+        for i in range(n):
+            if S.active[i]:
+                ti.atomic_max(S.max_disp[None], kick_particle(i, t, dt, drift, 1))
+        advance_surfaces(dt)
 
     if forces is None:
         return kick_drift, kick, None
 
+    odd_and_kick = forces.odd_pass(kick_particle)
+
     @ti.kernel
-    def forces_and_kick(n: ti.i32, t: float, dt: float, stamp: ti.i32, conduct: ti.i32, diag: ti.i32, drift: ti.i32,
-                        kick: ti.i32):
-        forces(n, t, dt, stamp, conduct, diag)
-        kick_pass(n, t, dt, drift, kick)
+    def forces_and_kick(n: ti.i32, t: float, dt: float, conduct: ti.i32, diag: ti.i32, drift: ti.i32, kick: ti.i32):
+        forces.even_pass(n, t, dt, conduct, diag)
+        S.max_disp[None] = 0.0
+        odd_and_kick(n, t, dt, conduct, diag, drift, kick)
+        if kick:
+            advance_surfaces(dt)
 
     return kick_drift, kick, forces_and_kick

@@ -141,7 +141,7 @@ def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dic
                   split: bool = True) -> dict:
     """Run `warmup` steps of a loaded scene (from a checkpoint `resume`, `tidem.checkpoint.load`,
     if given), then `steps` timed steps by phase; returns {scene, particles, steps, wall_s,
-    particle_steps_per_s, profile}. With `split` the contacts' own pass and the kick run as kernels
+    particle_steps_per_s, profile}. With `split` the contact passes and the kick run as kernels
     of their own, so that the profile tells them apart (a run takes them in one launch). Taichi
     must be initialised."""
     import taichi as ti

@@ -24,12 +24,12 @@ import numpy as np
 from taichi.lang.field import Field
 
 FILE = "checkpoint.npz"
-FORMAT = 1
+FORMAT = 2  # 2: each pair in its owner's row only, the slabs (kernels/broadphase.py)
 # Scene keys that may change between a run and its resume: output cadence, rendering, the
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
-# Rewritten by every force pass (the positions the partner pass reads, kernels/contact.py): not kept.
-TRANSIENT = ("xf", "stamp", "split", "conduct", "diag")  # rewritten before use (split: by `restore`, from the rows)
+# Rewritten before use (the conduction flag by every force pass, the rest by every neighbour build): not kept.
+TRANSIENT = ("conduct", "src", "nbr_new", "nbr_count", "slab_fill", "flips", "flip_ft", "flip_mr", "flip_dmax")
 
 
 class CheckpointError(RuntimeError):
@@ -142,7 +142,6 @@ def restore(solver, meta: dict, arrays: dict) -> None:
                                   f"{fld.to_numpy().shape} (made by another version of tidem, or for other "
                                   "capacities): start a new run")
         fld.from_numpy(arrays[name])
-    solver.restored()
     s = meta["solver"]
     solver.t, solver.steps, solver.rebuilds, solver.profile_t0 = s["t"], s["steps"], s["rebuilds"], s["profile_t0"]
     if solver.gas is not None:

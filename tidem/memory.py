@@ -81,7 +81,7 @@ def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
     """Bytes of the Taichi fields per particle (`tidem.state.State`) other than the neighbour
     and contact-history rows; `feat` has the attributes of `tidem.model.Features` used here."""
     fp = feat.float_bytes
-    per = fp * (3 * 8 + 6) + 4 * 9  # vectors x v w f tq x_build xf + scalars; ints
+    per = fp * (3 * 7 + 6) + 4 * 11  # vectors x v w f tq x_build + scalars; ints (slab, slab_list, nbr_count)
     per += wall_slots * (4 + 3 * fp)
     if feat.rolling:
         per += 3 * fp * wall_slots
@@ -97,15 +97,14 @@ def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
 
 
 def neighbor_bytes(feat, neighbors: int) -> int:
-    """Bytes per particle of the neighbour list and its contact history (springs, heat rows)."""
+    """Bytes per particle of the neighbour list and its contact history (springs), with the
+    rebuild's buffer of the history of pairs that change owner (one entry per particle)."""
     fp = feat.history_bytes
-    per = neighbors * (4 * 3 + 3 * fp)  # nbr, nbr_new, src, ft
+    per = (neighbors + 1) * 3 * fp + neighbors * 4 * 3  # ft and flip_ft; nbr, nbr_new, src
     if feat.rolling:
-        per += 3 * fp * neighbors
+        per += 3 * fp * (neighbors + 1)
     if feat.hysteretic:
-        per += fp * neighbors
-    if feat.heat and feat.contacts:
-        per += neighbors * fp  # qpair
+        per += fp * (neighbors + 1)
     return per
 
 

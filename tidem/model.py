@@ -14,7 +14,7 @@ from tidem.contact_params import hysteretic_floor_errors, parameter_tables
 from tidem.features import Features, scene_features
 from tidem.gas_limits import gas_step_checks
 from tidem.heat_limits import heat_step_errors
-from tidem.kernels.geometry import Grid
+from tidem.kernels.geometry import Grid, slab_axis_for
 from tidem.memory import (HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, default_neighbors, field_bytes, memory_refusal,
                           scene_refusal)
 from tidem.overlaps import initial_overlaps
@@ -90,14 +90,15 @@ class Model:
         return RUNTIME_BYTES + self.memory_bytes() + HOST_BYTES_PER_PARTICLE * self.capacity
 
 
-def neighbour_grid(lo, lengths, periodic, capacity: int, reach: float) -> Grid:
+def neighbour_grid(lo, lengths, periodic, capacity: int, reach: float, gravity=(0.0, 0.0, 0.0)) -> Grid:
     """The broad phase's cell grid over the domain: cells at least `reach` wide (largest
     diameter + skin + gas lens), coarsened for a sparse, huge domain to at most
-    max(64 capacity, 2^20) cells."""
+    max(64 capacity, 2^20) cells; its slab axis chosen by `gravity` (`kernels/geometry.py`)."""
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
     while math.prod(cells) > max(64 * capacity, 1 << 20):
         cells = [max(min(c, 3) if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
-    return Grid(lo=tuple(lo), length=tuple(lengths), periodic=periodic, cells=tuple(cells))
+    return Grid(lo=tuple(lo), length=tuple(lengths), periodic=periodic, cells=tuple(cells),
+                slab_axis=slab_axis_for(cells, gravity))
 
 
 def neighbour_slots(num, d_max: float, d_min: float, fluid_layer: float) -> int:
@@ -148,7 +149,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     skin = num.skin * d_max
     fluid_layer = scene.heat.fluid_layer if scene.heat is not None else 0.0
     heat_reach = 0.5 * fluid_layer * d_max
-    grid = neighbour_grid(dom.min, lengths, periodic, len(radius), d_max + skin + heat_reach)
+    grid = neighbour_grid(dom.min, lengths, periodic, len(radius), d_max + skin + heat_reach, dom.gravity)
     k = neighbour_slots(num, d_max, 2.0 * radius.min(), fluid_layer) if contacts else 1  # 1: no list is built
 
     heat_cap = thermal_limit = None

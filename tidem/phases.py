@@ -15,10 +15,10 @@ import time
 
 import taichi as ti
 
-# "kick-drift": the first half kick and the drift; "contact forces": the pass in which each
-# pair's lower-index particle evaluates the contact (and the walls and tubes); "kick": the
-# second half kick, which in scenes without reactions also runs the contacts' partner pass and
-# adds the gas forces, and between outputs the next step's kick-drift (one kernel,
+# "kick-drift": the first half kick and the drift; "contact forces": the two passes in which each
+# pair's owner evaluates the contact for both particles (and the walls and tubes); "kick": the
+# second half kick, which in scenes without reactions also adds the gas forces, and between
+# outputs the next step's kick-drift (one kernel,
 # `tidem.solver`: "kick-drift" then counts only the first step after each output); "forces and
 # kick": the two in one kernel launch, as a run without reactions takes them (`tidem bench
 # --profile` runs them as kernels of their own to tell them apart); "gas coupling": voidage, drag and heat

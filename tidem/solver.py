@@ -6,9 +6,8 @@ every `numerics.sort_interval` rebuilds first a re-sort of particle storage into
 (`tidem.storage_order`), a gas step every `gas.coupling_interval` steps (scenes with gas),
 forces (contacts, with the conduction every `heat.conduction_interval` steps, then drag and
 pressure-gradient force), reactions (with a rebuild when a
-particle burnt out or left), kick. Without reactions the kick kernel itself finishes the
-forces (the contacts' partner pass and the gas forces), the contacts' own pass and the kick
-are one kernel launch (`forces_and_kick`), and `advance(k)`, which the run loop calls between
+particle burnt out or left), kick. Without reactions the contact passes and the kick (which
+adds the gas forces first) are one kernel launch (`forces_and_kick`), and `advance(k)`, which the run loop calls between
 outputs, has each kick go on with the next step's kick-drift: a step is then one kernel launch
 (plus the gas step and the neighbour build when due), bit for bit the same as k calls of
 `step()` and as separate kernels (`split_passes`, which `tidem bench --profile` sets).
@@ -100,28 +99,24 @@ class Solver:
                                    model.pair_params.shape[0] == 1, f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
                                    model.skin + model.heat_reach, model.grain_scale)
-        self._rebuild = self._count_split = None
+        self._rebuild = None
         if f.contacts:  # one launch: the list, then the surfaces in reach (culling)
             after = (forces.mark_near,) if forces.mark_near is not None else ()
-            rebuild, self._count_split = make_neighbor_builder(model.grid, model.max_neighbors,
-                                                               model.skin + model.heat_reach, f.rolling, f.hysteretic,
-                                                               S, f.growth, after)
-            self._rebuild = hot(rebuild)
+            self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
+                                                      f.rolling, f.hysteretic, S, f.growth, after))
         return forces
 
     def _build_integrators(self, forces) -> None:
         """Kick-drift and kick (`kernels/integrate.py`). Without reactions (which act between the
-        forces and the kick) the kick kernel also runs the partner pass of the contact forces and
-        adds the gas forces: one launch less each."""
+        forces and the kick) the kick also adds the gas forces and runs in the contact passes' launch."""
         model, f = self.model, self.model.features
         self._fused = not f.reactions
-        self._own_forces = hot(forces.own)
-        self._partner_forces = None if self._fused or forces.partner is None else hot(forces.partner)
-        finish = ()
-        if self._fused:
-            finish = ((forces.gather,) if f.contacts else ()) + ((self.gas.force,) if self.gas else ())
+        self._forces = hot(forces.forces)
+        finish = (forces.finish,) if forces.finish is not None else ()
+        if self._fused and self.gas:
+            finish += (self.gas.force,)
         kernels = make_integrators(model.grid, self.state, f.heat, f.n_planes + f.n_tubes, model.angle_bins, f.foil,
-                                   f.growth, f.wall_foil, f.n_planes, finish, forces.own_pass if self._fused else None)
+                                   f.growth, f.wall_foil, f.n_planes, finish, forces if self._fused else None)
         self._kick_drift, self._kick, self._forces_and_kick = (hot(k) if k is not None else None for k in kernels)
 
     def _build_sources_and_sinks(self) -> None:
@@ -149,17 +144,15 @@ class Solver:
         if self.gas is not None:
             self._gas_step()
         if self._fused:
-            self._forces_and_kick(self.n, self.t, self.dt, self.steps, self._conduct_every, 1, 0, 0)  # forces only
+            self._forces_and_kick(self.n, self.t, self.dt, self._conduct_every, 1, 0, 0)  # forces only
         else:
-            self._own_forces(self.n, self.t, self.dt, self.steps, self._conduct_every, 1)
+            self._forces(self.n, self.t, self.dt, self._conduct_every, 1)
             self._finish_forces()
         self.check()
 
     def _finish_forces(self) -> None:
-        """The partner pass of the contact forces and the gas forces, in kernels of their own (with
-        reactions, which act between the forces and the kick)."""
-        if self._partner_forces is not None:
-            self._partner_forces(self.n, self.t)
+        """The gas forces, in a kernel of their own (with reactions, which act between the forces and
+        the kick)."""
         if self.gas is not None:
             self.gas.add_forces(self.n)
 
@@ -212,13 +205,13 @@ class Solver:
         # the conduction at steps 1, m + 1, 2 m + 1, ... for m steps each: the heat balances after every m steps
         conduct = self._conduct_every if (self.steps - 1) % self._conduct_every == 0 else 0
         diag = int(diag or self.steps % self._check_every == 0)
-        if self._fused and not self.split_passes:  # one launch: own pass, then the kick finishes the forces
-            self._forces_and_kick(self.n, self.t, dt, self.steps, conduct, diag, int(drift_next), 1)
+        if self._fused and not self.split_passes:  # one launch: the contact passes, each particle kicked in the second
+            self._forces_and_kick(self.n, self.t, dt, conduct, diag, int(drift_next), 1)
             t = lap("forces and kick", t)
         else:
-            self._own_forces(self.n, self.t, dt, self.steps, conduct, diag)
+            self._forces(self.n, self.t, dt, conduct, diag)
             t = lap("contact forces", t)
-            if not self._fused:  # else the kick finishes the forces (partner pass, gas forces)
+            if not self._fused:  # else the kick adds the gas forces
                 self._finish_forces()
                 t = lap("contact forces", t)
                 left = self.gas.interval - 1 - self.steps % self.gas.interval if self.gas is not None else 0
@@ -252,11 +245,6 @@ class Solver:
             self._rebuild(self.n)
             self.rebuilds += 1
 
-    def restored(self) -> None:
-        """Recompute what a checkpoint leaves out (`tidem.checkpoint.TRANSIENT`) after `checkpoint.restore`."""
-        if self._count_split is not None:
-            self._count_split(self.n)
-
     def _gas_step(self) -> None:
         try:
             self.gas.step(self.t)
@@ -275,6 +263,10 @@ class Solver:
             raise RunError(
                 f"wall contact overflow: a particle touches more than {self.model.wall_slots} walls/tubes at once; "
                 f"raise numerics.max_wall_contacts")
+        if over[2] > 0:
+            raise RunError(
+                f"neighbour list: {over[2]} contacts that changed owner at a rebuild lost their history (more than "
+                f"{self.n} at once); lower numerics.skin")
         x = S.x.to_numpy()
         active = S.active.to_numpy().astype(bool)
         bad = active & ~np.isfinite(x).all(axis=1)

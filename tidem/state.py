@@ -8,24 +8,22 @@ Per-particle fields, shape [capacity]:
   x, v, w          position [m], velocity [m/s], angular velocity [rad/s]
   f, tq            force [N], torque [N m] of the last force evaluation
   x_build          position at the last neighbour build [m]
-  xf               position at the last force evaluation [m] (the partner pass reads it)
   r_build          radius at the last neighbour build [m] (only with growing particles)
   radius, mass, inv_mass [1/kg], inv_inertia [1/(kg m^2)], mat (material index), active
   ovl              largest overlap / smaller radius over the particle's contacts
   ncontact         number of contacts
   ident            the particle's index in the Model's arrays (storage is re-sorted into
                    cell order as the bed flows, `tidem.storage_order`)
-Neighbour list, shape [capacity, K], stored slot-major (`_Placer.rows`): nbr (partner), ft
-(tangential spring [m]), mr (rolling spring [N m]), dmax (maximum overlap [m]); nbr_new and src
-are scratch rows of the rebuild.
-In a slot whose partner has the lower index (the pair's owner, kernels/contact.py) ft holds
-the force on the owner [N] and src the step of the last force pass that found the pair
-touching (stamp[None], the current pass's step), both written by the owner. With
-numerics.precision = 'mixed' the float rows (ft, mr, dmax, qpair) are float32, every other
-field float64.
-With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]), qpair
-[capacity, K] (heat rate into the particle from that neighbour, written by the lower-index
-particle of the pair, read by the higher one; see kernels/contact.py); per
+Neighbour list, shape [capacity, K], stored slot-major (`_Placer.rows`), each pair in its owner's
+row only (`kernels/broadphase.py`): nbr (partner), ft (tangential spring [m]), mr (rolling spring
+[N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild, nbr_count
+[capacity] its row lengths, flip_ft, flip_mr, flip_dmax [capacity] its buffer of the history of
+pairs that changed owner (flips[None] entries). With numerics.precision = 'mixed' the float rows
+(ft, mr, dmax, flip_*) are float32, every other field float64.
+Slabs (`kernels/geometry.py`, `slab_layout`): slab [capacity] (a particle's slab at the last
+build), slab_list (the particles of slab s, in index order, at slab_start[s] ..
+slab_start[s + 1] - 1), slab_fill (scratch of the build).
+With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
 into the bed [W]) and surf_energy (its time integral [J]); with angle bins around heated tubes
 tube_bin_rate / tube_bin_energy (the same by angle bin) and tube_side (the horizontal unit
@@ -61,6 +59,7 @@ import taichi as ti
 
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.averaging import channels
+from tidem.kernels.geometry import slab_layout
 from tidem.model import Model
 from tidem.reactions import N_SUMS
 from tidem.surfaces import angle_bin_area
@@ -94,7 +93,7 @@ def wall_foil_vector(plane: dict, model: Model) -> list[float]:
 
 
 def history_dtype(feat):
-    """The float type of the Verlet rows' contact history and hand-over (ft, mr, dmax, qpair):
+    """The float type of the Verlet rows' contact history (ft, mr, dmax):
     float32 with numerics.precision = 'mixed' (and 'float32'), else float64."""
     return ti.f32 if feat.history_bytes == 4 else ti.f64
 
@@ -142,12 +141,15 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.per_particle((N,), "r_build")
     for name in ("f", "tq", "x_build"):
         p.per_particle((N,), name, n=3)
-    p.place((N,), "xf", n=3)  # the positions of the last force pass (kernels/contact.py)
     for name in ("inv_mass", "inv_inertia", "ovl"):
         p.per_particle((N,), name)
-    # split: the row's entries with partners j < i (kernels/broadphase.py)
-    for name in ("active", "nbr_n", "split", "pcell", "ncontact", "sorted_idx", "wmask", "near"):
+    for name in ("active", "nbr_n", "pcell", "ncontact", "sorted_idx", "wmask", "near"):
         p.per_particle((N,), name, ti.i32)
+    for name in ("slab", "slab_list", "nbr_count"):  # rewritten by each neighbour build
+        p.place((N,), name, ti.i32)
+    n_slabs = slab_layout(model.grid)[1]
+    p.place((n_slabs + 1,), "slab_start", ti.i32)
+    p.place((n_slabs,), "slab_fill", ti.i32)
     if feat.contact_time:
         p.per_particle((N,), "touch_start")
         p.per_particle((N,), "touch_end")
@@ -155,13 +157,16 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.rows((N, K), name, ti.i32)
     hist = history_dtype(feat)
     p.rows((N, K), "ft", hist, n=3)
+    p.place((N,), "flip_ft", hist, n=3)
     p.per_particle((N, W), "wid", ti.i32)
     p.per_particle((N, W), "wft", n=3)
     if feat.rolling:
         p.rows((N, K), "mr", hist, n=3)
+        p.place((N,), "flip_mr", hist, n=3)
         p.per_particle((N, W), "wmr", n=3)
     if feat.hysteretic:
         p.rows((N, K), "dmax", hist)
+        p.place((N,), "flip_dmax", hist)
         p.per_particle((N, W), "wdmax")
     nc = model.grid.n_cells
     for name in ("cell_count", "cell_start", "cell_fill"):
@@ -178,19 +183,16 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_mask", n=3)
     p.place((NT,), "tube_r")
     p.S.max_disp = ti.field(p.fp)
-    p.S.stamp = ti.field(ti.i32)
-    p.S.diag = ti.field(ti.i32)  # this force pass fills ovl and ncontact (kernels/contact.py)
-    p.fb.place(p.S.max_disp, p.S.stamp, p.S.diag)
+    p.S.flips = ti.field(ti.i32)
+    p.fb.place(p.S.max_disp, p.S.flips)
 
 
 def _place_heat_fields(p: _Placer, model: Model) -> None:
     """Particle temperatures and heat rates, heated surfaces, angle bins and heated foils."""
-    N, K = model.capacity, model.max_neighbors
+    N = model.capacity
     feat = model.features
     for name in ("T", "q", "inv_heat_cap"):
         p.per_particle((N,), name)
-    if feat.contacts:
-        p.rows((N, K), "qpair", history_dtype(feat))
     NS = max(len(model.planes) + len(model.tubes), 1)
     p.place((NS,), "surf_T")
     p.place((NS,), "surf_rate")
@@ -261,7 +263,7 @@ def allocate(model: Model) -> State:
         _place_reaction_fields(p, model)
     if feat.averaging:
         _place_averaging_fields(p, model)
-    p.place((2,), "overflow", ti.i32)
+    p.place((3,), "overflow", ti.i32)
     p.place((5,), "sums")
     S._tree = p.fb.finalize()
     _fill_particles(S, model)

@@ -12,10 +12,7 @@ SORT_MIN_PARTICLES that neither pour nor react nor time contacts):
 2. every per-particle field of the State (`State.particle_fields`, rows of the Verlet list and
    of the wall slots included) is permuted; `ident` follows, so that outputs still name each
    particle by its index in the scene (snapshots' `id`, error messages);
-3. a pair's history lives in the row of its lower-index particle (`kernels/contact.py`); where
-   the new numbering swaps which of the two is lower, it is handed to the partner's mirror slot,
-   seen from the partner's side (springs change sign);
-4. partner indices in `nbr` are renumbered and each row is re-sorted by its new partner index,
+3. partner indices in `nbr` are renumbered and each row is re-sorted by its new partner index,
    taking its history along: the neighbour build that follows matches old and new rows by a
    merge of sorted rows (`kernels/broadphase.py`) and so carries every contact's history over.
 
@@ -30,9 +27,8 @@ import numpy as np
 from tidem.placement import spatial_key
 
 SORT_MIN_PARTICLES = 1024  # smaller scenes fit in cache in any order and keep theirs
-ROW_FIELDS = ("nbr", "ft", "mr", "dmax", "qpair")  # [capacity, K] fields that follow their row's order
-SCRATCH = ("nbr_new", "src", "split", "sorted_idx", "pcell")  # rewritten by the next neighbour build
-HISTORY = {"ft": -1.0, "mr": -1.0, "dmax": 1.0}  # pair history, and its sign seen from the partner
+ROW_FIELDS = ("nbr", "ft", "mr", "dmax")  # [capacity, K] fields that follow their row's order
+SCRATCH = ("nbr_new", "src", "sorted_idx", "pcell")  # rewritten by the next neighbour build
 
 
 def new_order(x: np.ndarray, active: np.ndarray, lo, cell: float) -> np.ndarray:
@@ -54,14 +50,13 @@ def sort_storage(S, lo, cell) -> bool:
 
 def permute_storage(S, order: np.ndarray) -> None:
     """Store particle order[k] at k: every per-particle field permuted, partners renumbered and
-    each Verlet row re-sorted by partner with its history (steps 2-4 of the module docstring).
-    The neighbour list must be rebuilt before the next force evaluation (mirror slots)."""
+    each Verlet row re-sorted by partner with its history (steps 2-3 of the module docstring).
+    The neighbour list must be rebuilt before the next force evaluation (the slab lists). A pair stays
+    in its owner's row: ownership follows slabs and `ident`, which a new numbering leaves alone."""
     renumber = np.empty_like(order)
     renumber[order] = np.arange(len(order))
     nbr, count = S.nbr.to_numpy(), S.nbr_n.to_numpy()
     slots = np.arange(nbr.shape[1])
-    history = {name: getattr(S, name).to_numpy() for name in HISTORY if hasattr(S, name)}
-    hand_over(history, nbr, count, S.src.to_numpy(), renumber)
     listed = slots[None, :] < count[order][:, None]
     partners = np.where(listed, renumber[nbr[order].clip(0)], np.iinfo(np.int32).max)
     within = np.argsort(partners, axis=1, kind="stable")  # each row by its new partner index
@@ -72,9 +67,9 @@ def permute_storage(S, order: np.ndarray) -> None:
         if name == "nbr":
             values = gather_rows(np.where(listed, partners, -1), np.arange(len(order)), within).astype(np.int32)
         elif name in ROW_FIELDS:
-            values = gather_rows(history[name] if name in history else field.to_numpy(), order, within)
+            values = gather_rows(field.to_numpy(), order, within)
         else:
-            values = (history[name] if name in history else field.to_numpy())[order]
+            values = field.to_numpy()[order]
         field.from_numpy(np.ascontiguousarray(values))
 
 
@@ -83,22 +78,6 @@ def gather_rows(rows: np.ndarray, order: np.ndarray, within: np.ndarray) -> np.n
     n, k = within.shape
     flat = (order[:, None] * k + within).ravel()
     return rows.reshape(n * k, *rows.shape[2:])[flat].reshape(rows.shape)
-
-
-def hand_over(history: dict, nbr: np.ndarray, count: np.ndarray, mirror: np.ndarray, renumber: np.ndarray) -> None:
-    """A pair's history lives in the row of its lower-index particle (`kernels/contact.py`); where
-    the new numbering makes the partner the lower one, copy it into the partner's mirror slot,
-    seen from the partner's side: tangential and rolling springs change sign (the relative
-    velocity and spin do), the maximum overlap does not."""
-    n, k = nbr.shape
-    rows = np.arange(n)[:, None]
-    owner = (np.arange(k)[None, :] < count[:, None]) & (nbr > rows)
-    i, slot = np.nonzero(owner)
-    j, m = nbr[i, slot], mirror[i, slot]
-    flip = (renumber[i] > renumber[j]) & (m >= 0)
-    i, slot, j, m = i[flip], slot[flip], j[flip], m[flip]
-    for name, values in history.items():
-        values[j, m] = values[i, slot] * HISTORY[name]
 
 
 def scene_order(S, values: np.ndarray) -> np.ndarray:

@@ -1,10 +1,12 @@
-"""Broad phase against brute force (periodic and walled, polydisperse), the mirror slots of the
-rows, and contact history carried across neighbour rebuilds."""
+"""Broad phase against brute force (periodic and walled, polydisperse): each pair listed once, in the
+row of its owner by the slab rule; the slab lists; contact history carried across neighbour rebuilds,
+also to a pair's new owner."""
 
 import numpy as np
 import pytest
 
 from tests.conftest import make_scene
+from tidem.kernels.geometry import slab_layout
 
 
 def brute_force_pairs(x, r, skin, lengths, periodic):
@@ -32,9 +34,14 @@ def random_spheres(rng, n, lo, hi, d_max):
 
 
 def listed_pairs(S, n):
+    """The rows' (owner, partner) entries."""
     nbr = S.nbr.to_numpy()
     cnt = S.nbr_n.to_numpy()
     return {(i, int(nbr[i, k])) for i in range(n) for k in range(cnt[i])}
+
+
+def unordered(pairs):
+    return {(min(i, j), max(i, j)) for i, j in pairs}
 
 
 THIN = np.array([0.02, 0.0055, 0.0055])  # y and z: 2 search cells of the 2.6 mm reach (2 mm spheres, skin 0.3)
@@ -61,16 +68,28 @@ def test_neighbour_list_matches_brute_force(solver_for, periodic, hi, n):
     per = [a in periodic for a in "xyz"]
     expected = brute_force_pairs(S.x.to_numpy(), r, s.model.skin, lengths, per)
     assert len(expected) > n, "the test must have many pairs"
-    assert listed_pairs(S, n) == expected
+    listed = listed_pairs(S, n)
+    assert len(listed) == len(expected) // 2 and unordered(listed) == unordered(expected), "each pair once"
     # rows are sorted by partner index
     nbr, cnt = S.nbr.to_numpy(), S.nbr_n.to_numpy()
     assert all(np.all(np.diff(nbr[i, : cnt[i]]) > 0) for i in range(n))
-    # each entry (i, k) with partner j > i knows the slot of i in j's row (the mirror slot)
-    mirror = S.src.to_numpy()
-    for i in range(n):
-        for k in range(cnt[i]):
-            j = nbr[i, k]
-            assert (nbr[j, mirror[i, k]] == i) if j > i else (mirror[i, k] == -1)
+    # the owner: the particle in the slab before the partner's, or in one slab the lower scene index
+    axis, count = slab_layout(s.model.grid)
+    slab, ident = S.slab.to_numpy()[:n], S.ident.to_numpy()[:n]
+    width = lengths[axis] / count
+    assert np.array_equal(slab, np.clip(np.floor((S.x.to_numpy()[:n, axis] - lo[axis]) / width), 0, count - 1))
+    wrap = count if per[axis] else 10**9
+    for i, j in listed:
+        ahead, behind = (slab[i] + 1) % wrap, (slab[i] - 1) % wrap
+        if slab[j] == slab[i] or (slab[j] == ahead and slab[j] == behind):
+            assert ident[i] < ident[j]
+        else:
+            assert slab[j] == ahead, f"pair {i, j}: slab {slab[j]} does not follow slab {slab[i]}"
+    # the slab lists: every particle once, each slab in index order
+    start, order = S.slab_start.to_numpy(), S.slab_list.to_numpy()[:n]
+    for q in range(count):
+        members = order[start[q]:start[q + 1]]
+        assert np.array_equal(members, np.flatnonzero(slab == q))
 
 
 def test_history_follows_partner_across_rebuild(solver_for):
@@ -107,27 +126,33 @@ def test_history_follows_partner_across_rebuild(solver_for):
     s._rebuild(n)
     after = listed_pairs(S, n)
     assert len(before & after) > 100 and len(after - before) > 100 and len(before - after) > 100
+    flipped = {(i, j) for i, j in after if (j, i) in before}
+    assert len(flipped) > 20, "particles crossed into other slabs: pairs changed owner"
     ft, mr, dmax = S.ft.to_numpy(), S.mr.to_numpy(), S.dmax.to_numpy()
     nbr, cnt = S.nbr.to_numpy(), S.nbr_n.to_numpy()
     for i in range(n):
         for k in range(cnt[i]):
             j = nbr[i, k]
-            want = np.array([i, j, 1.0]) if (i, j) in before else np.zeros(3)
+            want = np.zeros(3)
+            if (i, j) in before:
+                want = np.array([i, j, 1.0])
+            elif (j, i) in before:  # the new owner sees the springs of the old one with the other sign
+                want = -np.array([j, i, 1.0])
             assert np.array_equal(ft[i, k], want)
             assert np.array_equal(mr[i, k], 2 * want)
-            assert dmax[i, k] == want[1]
+            assert dmax[i, k] == abs(want[1])
 
 
 def test_capacity_overflow_is_an_error(solver_for):
     from tidem.solver import RunError
 
-    side = 0.001 + 0.00205 * np.arange(4)  # a cubic lattice just wider than d: six neighbours within reach
-    x = np.stack(np.meshgrid(side, side, side, indexing="ij"), axis=-1).reshape(-1, 3)
-    raw = make_scene(
+    side = 0.001 + 0.00205 * np.arange(4)  # a cubic lattice just wider than d, with a skin that reaches the
+    x = np.stack(np.meshgrid(side, side, side, indexing="ij"), axis=-1).reshape(-1, 3)  # face diagonals:
+    raw = make_scene(  # 18 neighbours within reach, about half of them in the particle's own row
         domain={"min": [0, 0, 0], "max": [0.01, 0.01, 0.01], "walls": "none", "gravity": [0, 0, 0]},
         particles=[{"name": "p", "material": "steel", "positions": x.tolist(),
                     "diameter": {"distribution": "mono", "value": 0.002}}],
-        numerics={"max_neighbors": 4, "max_overlap": 0.5},
+        numerics={"max_neighbors": 4, "max_overlap": 0.5, "skin": 0.5},
     )
     with pytest.raises(RunError, match="numerics.max_neighbors"):
         solver_for(raw)

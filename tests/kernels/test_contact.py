@@ -139,11 +139,11 @@ def test_energy_conserved_elastic_frictionless(solver_for):
 
 @pytest.mark.parametrize("moving_first, precision", [(True, "float64"), (False, "float64"), (False, "mixed")])
 def test_oblique_impact_conserves_momentum_and_spins_both_spheres_alike(solver_for, moving_first, precision):
-    """Each contact is evaluated by its lower-index sphere and handed to the other (mirror slot):
-    whichever sphere owns the pair, an oblique frictional impact of equal spheres, one at rest,
-    leaves total momentum unchanged and gives both spheres the same spin, r n x J_t (Newton's
-    third law for the tangential impulse at the shared contact point). With precision 'mixed'
-    the handed force is float32, and both spheres use that value."""
+    """Each contact is evaluated in its owner's row (in one slab, the lower scene index) and added to
+    both spheres: whichever sphere owns the pair, an oblique frictional impact of equal spheres, one
+    at rest, leaves total momentum unchanged and gives both spheres the same spin, r n x J_t (Newton's
+    third law for the tangential impulse at the shared contact point). With precision 'mixed' the
+    spring is kept in float32 and both spheres take the same float64 force."""
     r = 0.005
     x = [[-2.0 * r, 0.0, 0.0], [0.0, 0.6 * r, 0.0]]  # offset along y: an oblique hit
     v = [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
