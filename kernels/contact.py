@@ -6,8 +6,9 @@ row and gives the force F and rolling moment M on the owner i; the partner j rec
 torque r_j n x F - M (n the unit normal from i to j: Newton's third law, the contact point r_j n
 from j). Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
 owner's slab or in the next one, so
-1. `even_pass`: each even slab s, one thread per slab, clears the sums of slabs s and s + 1 and
-   sweeps s in index order (its pairs, walls and tubes);
+1. `even_pass`: each even slab s, one thread per slab, sweeps s in index order (its pairs, walls
+   and tubes), adding to the sums of slabs s and s + 1, which the last kick-drift zeroed
+   (`kernels/integrate.py`; and the contact counts, where the host reads them, here);
 2. `odd_pass`: each odd slab likewise, then, when the step goes on, integrates (`then`) the
    particles of that slab and the next: their sums are complete (each receives only from its own
    slab and the one before);
@@ -245,15 +246,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             field[j] = ti.max(field[j], value)
 
     @ti.func
-    def clear(i, diag):
-        """Zero particle i's sums before a force evaluation."""
-        S.f[i] = zero3
-        S.tq[i] = zero3
-        if ti.static(heat):
-            S.q[i] = 0.0
-        if diag:
-            S.ovl[i] = 0.0
-            S.ncontact[i] = 0
+    def clear(i):
+        """Zero particle i's contact count and largest overlap before a force evaluation that fills
+        them (the kick-drift zeroes the force, torque and heat flow)."""
+        S.ovl[i] = 0.0
+        S.ncontact[i] = 0
 
     @ti.func
     def visit(i, t, dt, conduct, diag):
@@ -406,9 +403,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             add(S.ncontact, i, touching)
 
     @ti.func
-    def clear_slab(s, diag):
+    def clear_slab(s):
         for p in range(S.slab_start[s], S.slab_start[s + 1]):
-            clear(S.slab_list[p], diag)
+            clear(S.slab_list[p])
 
     @ti.func
     def sweep_slab(s, t, dt, conduct, diag):
@@ -433,12 +430,14 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         if ti.static(not pairs):
             for i in range(n):
                 if S.active[i]:
-                    clear(i, diag)
+                    if diag:
+                        clear(i)
                     visit(i, t, dt, conduct, diag)
         elif ti.static(atomic):
-            for i in range(n):
-                if S.active[i]:
-                    clear(i, diag)
+            if diag:
+                for i in range(n):
+                    if S.active[i]:
+                        clear(i)
             for i in range(n):
                 if S.active[i]:
                     visit(i, t, dt, conduct, diag)
@@ -447,10 +446,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 if e % SPREAD == 0:
                     for r in range((n_slabs - n_odd - 1 - e // SPREAD) // workers + 1):  # every workers-th
                         s = 2 * (e // SPREAD + r * workers)
-                        clear_slab(s, diag)
-                        after = succ(s)
-                        if after >= 0 and after != s:
-                            clear_slab(after, diag)
+                        if diag:
+                            clear_slab(s)
+                            after = succ(s)
+                            if after >= 0 and after != s:
+                                clear_slab(after)
                         sweep_slab(s, t, dt, conduct, diag)
 
     def odd_pass(then=None):

@@ -69,9 +69,14 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     @ti.func
     def drift_particle(i, dt, zero):
         """The kick-drift of particle i (`zero`: 0, see opaque); returns its displacement since the
-        last neighbour build (plus the radius it gained), squared."""
+        last neighbour build (plus the radius it gained), squared. Then the force, torque and heat
+        flow are spent, and zeroed for the next force evaluation to add to (`kernels/contact.py`)."""
         S.v[i] = opaque(S.v[i], zero) + 0.5 * dt * opaque(S.f[i], zero) * S.inv_mass[i]
         S.w[i] = opaque(S.w[i], zero) + 0.5 * dt * opaque(S.tq[i], zero) * S.inv_inertia[i]
+        S.f[i] = ti.Vector([0.0, 0.0, 0.0])
+        S.tq[i] = ti.Vector([0.0, 0.0, 0.0])
+        if ti.static(heat):
+            S.q[i] = 0.0
         x = wrap(S.x[i] + dt * S.v[i])
         S.x[i] = x
         moved2 = min_image(x - S.x_build[i]).norm_sqr()
