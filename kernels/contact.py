@@ -47,8 +47,9 @@ from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radi
 # Loop iterations per worker in the slab loops. Taichi's CPU runtime (1.7) runs a parallel loop of fewer
 # than about a thousand iterations on one thread and splits a longer one into one block of consecutive
 # iterations per thread: a loop of SPREAD iterations per thread, of which the first of each block does
-# the work of one worker, gives each thread one worker, and each worker takes every T-th slab of the
-# pass (T threads): neighbouring slabs, which hold about as much work, go to different threads.
+# the work of one worker, gives each thread one worker. The workers take the slabs of a pass one at a
+# time from a shared counter (`S.slab_next`): the host thread starts at once while the others are
+# still waking up (tens of microseconds here), and a slab of more work holds up no one.
 SPREAD = 1024
 
 
@@ -442,10 +443,14 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 if S.active[i]:
                     visit(i, t, dt, conduct, diag)
         else:
+            S.slab_next[None] = 0
             for e in range(workers * SPREAD):
                 if e % SPREAD == 0:
-                    for r in range((n_slabs - n_odd - 1 - e // SPREAD) // workers + 1):  # every workers-th
-                        s = 2 * (e // SPREAD + r * workers)
+                    while True:
+                        m = ti.atomic_add(S.slab_next[None], 1)
+                        if m >= n_slabs - n_odd:
+                            break
+                        s = 2 * m
                         if diag:
                             clear_slab(s)
                             after = succ(s)
@@ -477,11 +482,14 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         if S.active[i]:
                             ti.atomic_max(S.max_disp[None], then(i, t, dt, drift, kick))
             else:
+                S.slab_next[None] = 0
                 for e in range(workers * SPREAD):
                     if e % SPREAD == 0:
                         largest = 0.0
-                        for r in range((n_odd + lone_first - 1 - e // SPREAD) // workers + 1):
-                            m = e // SPREAD + r * workers
+                        while True:
+                            m = ti.atomic_add(S.slab_next[None], 1)
+                            if m >= n_odd + lone_first:
+                                break
                             if m < n_odd:
                                 s = 2 * m + 1
                                 sweep_slab(s, t, dt, conduct, diag)
