@@ -41,7 +41,7 @@ from types import SimpleNamespace
 import taichi as ti
 
 from .contact_laws import make_contact_response
-from .geometry import make_geometry, make_slabs, slab_layout
+from .geometry import make_geometry, make_slabs
 from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radiation
 
 # Loop iterations per worker in the slab loops. Taichi's CPU runtime (1.7) runs a parallel loop of fewer
@@ -87,12 +87,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     conducts as those grains do (kernels/heat.py). `atomic`: atomic sums, one thread per particle
     (module docstring); None: on any architecture but the CPU."""
     if atomic is None:
-        atomic = ti.lang.impl.current_cfg().arch != ti.cpu or bool(__import__("os").environ.get("TIDEM_ATOMIC"))
+        atomic = ti.lang.impl.current_cfg().arch != ti.cpu
     flat = atomic or not pairs  # one loop over the particles, no slabs
     n_slabs, _slab_of, succ, _pred = make_slabs(grid)
-    axis, _count = slab_layout(grid)
     n_odd = n_slabs // 2
-    lone_first = 0 if grid.periodic[axis] and n_slabs >= 2 else 1  # slab 0 follows no odd slab
+    lone_first = 0 if grid.periodic[grid.slab_axis] and n_slabs >= 2 else 1  # slab 0 follows no odd slab
     workers = max(1, ti.lang.impl.current_cfg().cpu_max_num_threads)
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
@@ -428,13 +427,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     ti.loop_config(serialize=True)
                     for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                         S.tube_bin_rate[k, b] = 0.0
-        if ti.static(not pairs):
-            for i in range(n):
-                if S.active[i]:
-                    if diag:
-                        clear(i)
-                    visit(i, t, dt, conduct, diag)
-        elif ti.static(atomic):
+        if ti.static(flat):
             if diag:
                 for i in range(n):
                     if S.active[i]:
