@@ -12,9 +12,9 @@ SORT_MIN_PARTICLES that neither pour nor react nor time contacts):
 2. every per-particle field of the State (`State.particle_fields`, rows of the Verlet list and
    of the wall slots included) is permuted; `ident` follows, so that outputs still name each
    particle by its index in the scene (snapshots' `id`, error messages);
-3. partner indices in `nbr` are renumbered and each row is re-sorted by its new partner index,
-   taking its history along: the neighbour build that follows matches old and new rows by a
-   merge of sorted rows (`kernels/broadphase.py`) and so carries every contact's history over.
+3. partner indices in `nbr` are renumbered; each row keeps its order and its history: the
+   neighbour build that follows finds every old partner in its new row by index
+   (`kernels/broadphase.py`) and so carries every contact's history over.
 
 The order depends on positions only, at fixed steps, so float64 runs stay deterministic and a
 resumed run bit-identical (the rebuild count, which times the sorts, is in the checkpoint).
@@ -27,7 +27,6 @@ import numpy as np
 from tidem.placement import spatial_key
 
 SORT_MIN_PARTICLES = 1024  # smaller scenes fit in cache in any order and keep theirs
-ROW_FIELDS = ("nbr", "ft", "mr", "dmax")  # [capacity, K] fields that follow their row's order
 SCRATCH = ("nbr_new", "src", "sorted_idx", "pcell")  # rewritten by the next neighbour build
 
 
@@ -49,35 +48,23 @@ def sort_storage(S, lo, cell) -> bool:
 
 
 def permute_storage(S, order: np.ndarray) -> None:
-    """Store particle order[k] at k: every per-particle field permuted, partners renumbered and
-    each Verlet row re-sorted by partner with its history (steps 2-3 of the module docstring).
-    The neighbour list must be rebuilt before the next force evaluation (the slab lists). A pair stays
-    in its owner's row: ownership follows slabs and `ident`, which a new numbering leaves alone."""
+    """Store particle order[k] at k: every per-particle field permuted (a Verlet row with its history
+    as one), partners renumbered (steps 2-3 of the module docstring). The neighbour list must be
+    rebuilt before the next force evaluation (the slab lists). A pair stays in its owner's row:
+    ownership follows slabs and `ident`, which a new numbering leaves alone."""
     renumber = np.empty_like(order)
     renumber[order] = np.arange(len(order))
-    nbr, count = S.nbr.to_numpy(), S.nbr_n.to_numpy()
-    slots = np.arange(nbr.shape[1])
-    listed = slots[None, :] < count[order][:, None]
-    partners = np.where(listed, renumber[nbr[order].clip(0)], np.iinfo(np.int32).max)
-    within = np.argsort(partners, axis=1, kind="stable")  # each row by its new partner index
+    nbr, count = S.nbr.to_numpy()[order], S.nbr_n.to_numpy()[order]
+    listed = np.arange(nbr.shape[1])[None, :] < count[:, None]
     for name in S.particle_fields:
         if name in SCRATCH:
             continue
         field = getattr(S, name)
         if name == "nbr":
-            values = gather_rows(np.where(listed, partners, -1), np.arange(len(order)), within).astype(np.int32)
-        elif name in ROW_FIELDS:
-            values = gather_rows(field.to_numpy(), order, within)
+            values = np.where(listed, renumber[nbr.clip(0)], -1).astype(np.int32)
         else:
             values = field.to_numpy()[order]
         field.from_numpy(np.ascontiguousarray(values))
-
-
-def gather_rows(rows: np.ndarray, order: np.ndarray, within: np.ndarray) -> np.ndarray:
-    """New row r, slot s <- rows[order[r], within[r, s]] (a [capacity, K, ...] array), in one gather."""
-    n, k = within.shape
-    flat = (order[:, None] * k + within).ravel()
-    return rows.reshape(n * k, *rows.shape[2:])[flat].reshape(rows.shape)
 
 
 def scene_order(S, values: np.ndarray) -> np.ndarray:
