@@ -5,13 +5,13 @@ the contact law (`contact_laws.make_contact_response`) updates the pair's histor
 row and gives the force F and rolling moment M on the owner i; the partner j receives -F and the
 torque r_j n x F - M (n the unit normal from i to j: Newton's third law, the contact point r_j n
 from j). Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
-owner's slab or in the next one, so
-1. `even_pass`: each even slab s, one thread per slab, sweeps s in index order (its pairs, walls
+owner's slab or in the next one, so (`passes`)
+1. pass 1: each even slab s, one thread per slab, sweeps s in index order (its pairs, walls
    and tubes), adding to the sums of slabs s and s + 1, which the last kick-drift zeroed
    (`kernels/integrate.py`; and the contact counts, where the host reads them, here);
-2. `odd_pass`: each odd slab likewise, then, when the step goes on, integrates (`then`) the
-   particles of that slab and the next: their sums are complete (each receives only from its own
-   slab and the one before);
+2. pass 2, once every even slab is swept: each odd slab likewise, then, when the step goes on,
+   integrates (`then`) the particles of that slab and the next: their sums are complete (each
+   receives only from its own slab and the one before);
 no two threads then write the same particle and every sum is taken in the same order whatever the
 thread count: float64 runs are bit-reproducible without atomics. Each particle is read and written
 about once per step, which is what the large beds, whose fields do not fit in cache, wait on. With
@@ -48,7 +48,7 @@ from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radi
 # than about a thousand iterations on one thread and splits a longer one into one block of consecutive
 # iterations per thread: a loop of SPREAD iterations per thread, of which the first of each block does
 # the work of one worker, gives each thread one worker. The workers take the slabs of a pass one at a
-# time from a shared counter (`S.slab_next`): the host thread starts at once while the others are
+# time from shared counters (`S.slab_next`): the host thread starts at once while the others are
 # still waking up (tens of microseconds here), and a slab of more work holds up no one.
 SPREAD = 1024
 
@@ -58,10 +58,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
                       surface_reach: float = 0.0, grain_scale: float = 1.0, atomic: bool | None = None):
-    """Return a namespace of the kernel `forces(n, t, dt, conduct, diag)` (both passes), the Taichi
-    funcs `even_pass(n, t, dt, conduct, diag)` and, from `odd_pass(then)`, `odd(n, t, dt, conduct, diag,
-    drift, kick)`, which calls the Taichi func then(i, t, dt, drift, kick) on every particle whose sums
-    are complete (`kernels/integrate.py` fuses the kick with them); `finish(i, t)` (the
+    """Return a namespace of the kernel `forces(n, t, dt, conduct, diag)` (both passes), `passes(then)`,
+    which makes the Taichi func of both passes that calls the Taichi func then(i, t, dt, drift, kick) on
+    every particle whose sums are complete (`kernels/integrate.py` fuses the kick with them); `finish(i, t)` (the
     contact times, None without them) and `mark_near(n)` (below). With heat, `conduct` = m > 0 evaluates
     the conduction and books the heat of m steps (q[i] = m x the heat flow: heat.conduction_interval =
     m evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
@@ -91,6 +90,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     flat = atomic or not pairs  # one loop over the particles, no slabs
     n_slabs, _slab_of, succ, _pred = make_slabs(grid)
     n_odd = n_slabs // 2
+    n_even = n_slabs - n_odd
     lone_first = 0 if grid.periodic[grid.slab_axis] and n_slabs >= 2 else 1  # slab 0 follows no odd slab
     workers = max(1, ti.lang.impl.current_cfg().cpu_max_num_threads)
     pfp = heat and fluid_layer > 0.0
@@ -422,13 +422,12 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             visit(S.slab_list[p], t, dt, conduct, diag)
 
     @ti.func
-    def even_pass(n, t, dt, conduct, diag):
-        """Pass 1 (module docstring): the even slabs, or with `flat` every particle."""
-        if ti.static(track_contact_time):
-            diag = 1  # the contact times need the count in every pass
+    def start_pass(conduct):
+        """Before the passes: the conduction of this step for the kick, and with it the surfaces' heat
+        flows zeroed (else those of the last evaluation hold)."""
         if ti.static(heat):
-            S.conduct[None] = conduct  # for the kick
-            if conduct:  # else the surfaces' heat flows of the last evaluation hold
+            S.conduct[None] = conduct
+            if conduct:
                 ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
                 for s in range(n_surf):
                     S.surf_rate[s] = 0.0
@@ -436,35 +435,17 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     ti.loop_config(serialize=True)
                     for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                         S.tube_bin_rate[k, b] = 0.0
-        if ti.static(flat):
-            if diag:
-                for i in range(n):
-                    if S.active[i]:
-                        clear(i)
-            for i in range(n):
-                if S.active[i]:
-                    visit(i, t, dt, conduct, diag)
-        else:
-            S.slab_next[None] = 0
-            for e in range(workers * SPREAD):
-                if e % SPREAD == 0:
-                    while True:
-                        m = ti.atomic_add(S.slab_next[None], 1)
-                        if m >= n_slabs - n_odd:
-                            break
-                        s = 2 * m
-                        if diag:
-                            clear_slab(s)
-                            after = succ(s)
-                            if after >= 0 and after != s:
-                                clear_slab(after)
-                        sweep_slab(s, t, dt, conduct, diag)
 
-    def odd_pass(then=None):
-        """Pass 2 (module docstring) as a Taichi func odd(n, t, dt, conduct, diag, drift, kick) that
-        calls the Taichi func then(i, t, dt, drift, kick) on every particle once its sums are complete
-        and keeps the largest value it returns in S.max_disp[None] (the squared displacements of the
-        kick-drifts): one atomic per slab, not one per particle."""
+    def passes(then=None):
+        """Both passes (module docstring) as a Taichi func passes(n, t, dt, conduct, diag, drift, kick)
+        that calls the Taichi func then(i, t, dt, drift, kick) on every particle once its sums are
+        complete and keeps the largest value it returns in S.max_disp[None] (the squared displacements
+        of the kick-drifts): one atomic per worker, not one per particle. One parallel loop: each
+        worker takes even slabs from a shared counter (S.slab_next[0]) while any are left, waits until
+        every even slab is swept (S.slab_next[1] counts them), then takes odd slabs (S.slab_next[2]).
+        A worker waits only for slabs that another one took and is sweeping, so the loop finishes on
+        any number of threads, one included; it saves the start of a second parallel loop (about
+        50 us on two threads, `benchmarks/README.md`). With `flat`: two loops over the particles."""
         kicks = then is not None
 
         @ti.func
@@ -475,21 +456,44 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
             return largest
 
         @ti.func
-        def odd(n, t, dt, conduct, diag, drift, kick):
+        def both(n, t, dt, conduct, diag, drift, kick):
             if ti.static(track_contact_time):
-                diag = 1
+                diag = 1  # the contact times need the count in every pass
+            start_pass(conduct)
             if ti.static(flat):
+                if diag:
+                    for i in range(n):
+                        if S.active[i]:
+                            clear(i)
+                for i in range(n):
+                    if S.active[i]:
+                        visit(i, t, dt, conduct, diag)
                 if ti.static(kicks):
                     for i in range(n):
                         if S.active[i]:
                             ti.atomic_max(S.max_disp[None], then(i, t, dt, drift, kick))
             else:
-                S.slab_next[None] = 0
+                for c in ti.static(range(3)):
+                    S.slab_next[c] = 0
                 for e in range(workers * SPREAD):
                     if e % SPREAD == 0:
+                        while True:  # pass 1
+                            m = ti.atomic_add(S.slab_next[0], 1)
+                            if m >= n_even:
+                                break
+                            s = 2 * m
+                            if diag:
+                                clear_slab(s)
+                                after = succ(s)
+                                if after >= 0 and after != s:
+                                    clear_slab(after)
+                            sweep_slab(s, t, dt, conduct, diag)
+                            ti.atomic_add(S.slab_next[1], 1)
+                        while ti.atomic_add(S.slab_next[1], 0) < n_even:  # the odd slabs' sums start in pass 1
+                            pass
                         largest = 0.0
-                        while True:
-                            m = ti.atomic_add(S.slab_next[None], 1)
+                        while True:  # pass 2
+                            m = ti.atomic_add(S.slab_next[2], 1)
                             if m >= n_odd + lone_first:
                                 break
                             if m < n_odd:
@@ -505,13 +509,12 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         if ti.static(kicks):
                             ti.atomic_max(S.max_disp[None], largest)
 
-        return odd
+        return both
 
-    forces_only = odd_pass()
+    forces_only = passes()
 
     @ti.kernel
     def forces(n: ti.i32, t: float, dt: float, conduct: ti.i32, diag: ti.i32):
-        even_pass(n, t, dt, conduct, diag)
         forces_only(n, t, dt, conduct, diag, 0, 0)
 
     @ti.func
@@ -533,5 +536,5 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         """The contact times of particle i, from its complete contact count."""
         note_contact_time(i, S.ncontact[i], t)
 
-    return SimpleNamespace(forces=forces, even_pass=even_pass, odd_pass=odd_pass,
+    return SimpleNamespace(forces=forces, passes=passes,
                            finish=finish if track_contact_time else None, mark_near=mark_near_surfaces if cull else None)

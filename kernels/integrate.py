@@ -154,13 +154,12 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     if forces is None:
         return kick_drift, kick, None
 
-    odd_and_kick = forces.odd_pass(kick_particle)
+    passes_and_kick = forces.passes(kick_particle)
 
     @ti.kernel
     def forces_and_kick(n: ti.i32, t: float, dt: float, conduct: ti.i32, diag: ti.i32, drift: ti.i32, kick: ti.i32):
-        forces.even_pass(n, t, dt, conduct, diag)
         S.max_disp[None] = 0.0
-        odd_and_kick(n, t, dt, conduct, diag, drift, kick)
+        passes_and_kick(n, t, dt, conduct, diag, drift, kick)
         if kick:
             advance_surfaces(dt)
 

@@ -184,8 +184,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_r")
     p.S.max_disp = ti.field(p.fp)
     p.S.flips = ti.field(ti.i32)
-    p.S.slab_next = ti.field(ti.i32)  # the next slab of a contact pass to take (kernels/contact.py)
-    p.fb.place(p.S.max_disp, p.S.flips, p.S.slab_next)
+    p.fb.place(p.S.max_disp, p.S.flips)
+    p.place((3,), "slab_next", ti.i32)  # the contact passes' slab counters (kernels/contact.py)
 
 
 def _place_heat_fields(p: _Placer, model: Model) -> None:
