@@ -53,11 +53,13 @@ LAW_IDS = {"linear": LINEAR, "hertz_mindlin": HERTZ, "hysteretic": HYSTERETIC, "
 @ti.func
 def rotate_into_plane(h, n):
     """Project a history vector onto the plane normal to n, keeping its length (scaled by
-    sqrt(|h|^2 / |h_projected|^2): one square root)."""
-    out = h - h.dot(n) * n
-    new2 = out.norm_sqr()
+    sqrt(|h|^2 / |h_projected|^2), |h_projected|^2 = |h|^2 - (h.n)^2 for a unit n: one square root)."""
+    hn = h.dot(n)
+    out = h - hn * n
+    h2 = h.norm_sqr()
+    new2 = h2 - hn * hn
     if new2 > 0.0:
-        out *= ti.sqrt(h.norm_sqr() / new2)
+        out *= ti.sqrt(h2 / new2)
     return out
 
 

@@ -171,3 +171,36 @@ def test_oblique_impact_conserves_momentum_and_spins_both_spheres_alike(solver_f
     assert abs(w[0, 2]) > 1.0  # rad/s: friction spun them about z
     np.testing.assert_allclose(w[1], w[0], rtol=1e-9, atol=1e-9 * abs(w[0, 2]))
     np.testing.assert_allclose(S.v.to_numpy().sum(axis=0), p0, atol=1e-12)
+
+
+def test_spring_rotation_keeps_the_length_in_the_new_tangent_plane():
+    """rotate_into_plane (kernels/contact_laws.py): the spring ends normal to n with its length, for a
+    turn of 1e-6 rad (a step's) and of 1 rad; a zero spring stays zero."""
+    import taichi as ti
+
+    from tidem.kernels.contact_laws import rotate_into_plane
+
+    rng = np.random.default_rng(3)
+    cases = []
+    for angle in (1e-6, 1.0, 0.0):
+        h = rng.normal(size=3)
+        n_old = np.cross(h, rng.normal(size=3))
+        n_old /= np.linalg.norm(n_old)  # h lies in the plane normal to n_old
+        axis = np.cross(n_old, rng.normal(size=3))
+        axis /= np.linalg.norm(axis)
+        n = n_old * math.cos(angle) + np.cross(axis, n_old) * math.sin(angle)
+        cases.append((h if angle > 0 else np.zeros(3), n))
+    h_in, n_in, out = (ti.Vector.field(3, ti.f64, shape=len(cases)) for _ in range(3))
+    h_in.from_numpy(np.array([c[0] for c in cases]))
+    n_in.from_numpy(np.array([c[1] for c in cases]))
+
+    @ti.kernel
+    def rotate():
+        for k in range(len(cases)):
+            out[k] = rotate_into_plane(h_in[k], n_in[k])
+
+    rotate()
+    got = out.to_numpy()
+    for (h, n), g in zip(cases, got):
+        assert abs(g @ n) < 1e-14 * max(np.linalg.norm(h), 1.0)
+        assert np.linalg.norm(g) == pytest.approx(np.linalg.norm(h), rel=1e-13, abs=0.0)
