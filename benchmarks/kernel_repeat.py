@@ -4,10 +4,12 @@ scene's checkpoint): the cleanest figure for a change to one of these kernels, s
 state nor the work changes between calls.
 
     python benchmarks/kernel_repeat.py SCENE RUN_DIR [CALLS [THREADS]]
+    python benchmarks/kernel_repeat.py peer:N - [CALLS [THREADS]]
 
 RUN_DIR holds a checkpoint.npz of SCENE (e.g. `tidem scene fluidized_tube --t-end 0.3 --out RUN_DIR
---no-render`). Takes 20 steps, then times CALLS (default 100) calls of each kernel after one untimed
-call and prints the minimum, 20th percentile and median in ms. For a tree other than the installed
+--no-render`); `peer:N` is instead the N-particle peer benchmark bed of `tidem bench` (float64, after
+its 300 warm-up steps). Takes 20 steps, then times CALLS (default 100) calls of each kernel after one
+untimed call and prints the minimum, 20th percentile and median in ms. For a tree other than the installed
 one, run it with `env PYTHONPATH=TREE python -P benchmarks/kernel_repeat.py ...` from a folder
 without a tidem tree.
 """
@@ -21,19 +23,28 @@ import taichi as ti
 import typer
 
 from tidem import checkpoint
-from tidem.bench import advance
+from tidem.bench import advance, bench_scene, tiled_bed
 from tidem.cli import _checkpoint
 from tidem.cli_common import build_or_exit, load_scene
 from tidem.runtime import ensure_taichi
+from tidem.model import build_model
+from tidem.scene.load import validate
 from tidem.solver import Solver
 
 
 def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
-    loaded = load_scene(scene, [])
-    ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
-    model = build_or_exit(loaded)
-    solver = Solver(model)
-    checkpoint.restore(solver, *_checkpoint(Path(run_dir), loaded, model))
+    if scene.startswith("peer:"):
+        ensure_taichi("cpu", "float64", threads)
+        x, extent = tiled_bed(int(scene.removeprefix("peer:")))
+        solver = Solver(build_model(validate(bench_scene(x, extent, "float64"), "<bench>")))
+        advance(solver, 300)
+    else:
+        loaded = load_scene(scene, [])
+        ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
+        model = build_or_exit(loaded)
+        solver = Solver(model)
+        checkpoint.restore(solver, *_checkpoint(Path(run_dir), loaded, model))
+    model = solver.model
     advance(solver, 20)
     n, t, dt = solver.n, solver.t, solver.dt
     # as most steps run it: no contact counts and overlaps for the host (kernels/contact.py)

@@ -133,23 +133,18 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                             # overwrites it unless it is kept), which spares the mispredicted jumps of an
                             # unpredictable test
                             j = S.sorted_idx[s]
-                            d = min_image(S.x[j] - xi)
-                            reach = ri + S.radius[j] + skin
+                            dist2 = min_image(S.x[j] - xi).norm_sqr()
+                            rsum = ri + S.radius[j]
                             sj = S.slab[j]
                             tie = (sj == si) | ((sj == ahead) & (sj == behind))
                             owned = ti.select(tie, ident < S.ident[j], sj == ahead)
-                            S.nbr_new[i, ti.min(count, K - 1)] = j
-                            count += ti.cast(d.norm_sqr() < reach * reach, ti.i32) * ti.cast(owned, ti.i32)
+                            # step 3's sort key: partner + (0 if it touches i, else capacity)
+                            S.nbr_new[i, ti.min(count, K - 1)] = j + ti.select(dist2 < rsum * rsum, 0, capacity)
+                            count += ti.cast(dist2 < (rsum + skin) * (rsum + skin), ti.i32) * ti.cast(owned, ti.i32)
             if count > K:
                 ti.atomic_max(S.overflow[0], count)
                 count = K
-            # step 3's order: an insertion sort by key = partner + (0 if it touches i, else capacity)
-            for a in range(count):
-                j = S.nbr_new[i, a]
-                rsum = ri + S.radius[j]
-                apart = min_image(S.x[j] - xi).norm_sqr() >= rsum * rsum
-                S.nbr_new[i, a] = j + ti.select(apart, capacity, 0)
-            for a in range(1, count):
+            for a in range(1, count):  # insertion sort by key (step 3)
                 key = S.nbr_new[i, a]
                 b = a - 1
                 while b >= 0 and S.nbr_new[i, b] > key:
@@ -252,7 +247,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         take_history(i, k, src)
                         k = src if src >= 0 else count
             for p in range(count):
-                if S.src[i, p] != MOVED:
+                if S.src[i, p] != MOVED and S.src[i, p] != p:  # (a slot that keeps its history is left alone)
                     ft, mr, dmax = history(i, p)
                     k = p
                     while S.src[i, k] != MOVED:
