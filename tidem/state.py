@@ -22,7 +22,7 @@ pairs that changed owner (flips[None] entries). With numerics.precision = 'mixed
 (ft, mr, dmax, flip_*) are float32, every other field float64.
 Slabs (`kernels/geometry.py`, `slab_layout`): slab [capacity] (a particle's slab at the last
 build), slab_list (the particles of slab s, in index order, at slab_start[s] ..
-slab_start[s + 1] - 1), slab_fill (scratch of the build), slab_next (the contact passes' counter).
+slab_start[s + 1] - 1), slab_fill (scratch of the build), slab_next (the contact passes' three slab counters).
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
 into the bed [W]) and surf_energy (its time integral [J]); with angle bins around heated tubes
