@@ -194,9 +194,11 @@ def test_spring_rotation_keeps_the_length_in_the_new_tangent_plane():
     h_in.from_numpy(np.array([c[0] for c in cases]))
     n_in.from_numpy(np.array([c[1] for c in cases]))
 
+    m = len(cases)
+
     @ti.kernel
     def rotate():
-        for k in range(len(cases)):
+        for k in range(m):
             out[k] = rotate_into_plane(h_in[k], n_in[k])
 
     rotate()
