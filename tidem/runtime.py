@@ -26,6 +26,7 @@ import taichi as ti
 from tidem.thread_binding import bind_mode, bind_workers, process_threads
 
 _current: tuple[str, str, int] | None = None
+bound_workers: frozenset[int] = frozenset()  # the CPU workers the last start bound to cores
 COMPILE_MODES = ("auto", "full", "fast")
 _auto: dict[tuple[str, int], str] = {}  # what 'auto' started, by (precision, threads)
 
@@ -76,7 +77,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
     falls back to the CPU, saying so on stderr (Taichi's own `ti.gpu` probe is not used: it
     crashes the process on a machine without a GPU or display).
     """
-    global _current
+    global _current, bound_workers
     mode = compile_mode()
     bind_mode()  # TIDEM_BIND, checked before Taichi starts
     threads = threads or int(os.environ.get("TI_CPU_MAX_NUM_THREADS", os.cpu_count() or 1))
@@ -116,8 +117,9 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
         _current = None
         raise BackendUnavailable(f"Taichi could not start the '{arch}' backend here (got '{started}')")
     _current = key
+    bound_workers = frozenset()
     if started == "cpu":
-        bind_workers(threads, process_threads() - existing, _busy_loop)
+        bound_workers = bind_workers(threads, process_threads() - existing, _busy_loop)
     return started
 
 

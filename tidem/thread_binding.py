@@ -69,16 +69,16 @@ def one_cpu_per_core(cpus: list[int], sysfs: Path = Path("/sys/devices/system/cp
     return first + rest
 
 
-def bind_workers(threads: int, new_threads: set[int], busy_loop) -> bool:
+def bind_workers(threads: int, new_threads: set[int], busy_loop) -> frozenset[int]:
     """Bind the `threads` pool workers among `new_threads` (those `ti.init` started) to distinct
     cores; `busy_loop()` runs a parallel Taichi loop long enough for every worker to take part.
-    Returns whether it bound them."""
+    Returns the workers it bound (none where it bound nothing)."""
     mode = bind_mode()
     if threads < 2 or mode == "none" or not hasattr(os, "sched_setaffinity"):
-        return False
+        return frozenset()
     cpus = one_cpu_per_core(sorted(os.sched_getaffinity(0)))
     if len(cpus) < threads or (mode == "auto" and len(cpus) != threads):
-        return False
+        return frozenset()
     busy_loop()  # compiled by Taichi's compile threads, which must not count as workers
     workers: set[int] = set()
     for _attempt in range(5):  # a worker that woke late may find the loop done: try again
@@ -88,10 +88,10 @@ def bind_workers(threads: int, new_threads: set[int], busy_loop) -> bool:
         if len(workers) >= threads:
             break
     if len(workers) != threads:  # not told apart: leave the scheduler to place them
-        return False
+        return frozenset()
     try:
         for cpu, tid in zip(cpus, sorted(workers)):
             os.sched_setaffinity(tid, {cpu})
     except OSError:
-        return False
-    return True
+        return frozenset()
+    return frozenset(workers)
