@@ -9,7 +9,10 @@ state nor the work changes between calls.
 RUN_DIR holds a checkpoint.npz of SCENE (e.g. `tidem scene fluidized_tube --t-end 0.3 --out RUN_DIR
 --no-render`); `peer:N` is instead the N-particle peer benchmark bed of `tidem bench` (float64, after
 its 300 warm-up steps). Takes 20 steps, then times CALLS (default 100) calls of each kernel after one
-untimed call and prints the minimum, 20th percentile and median in ms. For a tree other than the installed
+untimed call and prints the minimum, 20th percentile and median in ms. The passes take a time step of
+zero: the same work as a step, but the springs do not grow from call to call (with the step's dt, some
+hundreds of calls on one state stretch them until the contacts slide, which costs more square roots
+and divisions than a step does). For a tree other than the installed
 one, run it with `env PYTHONPATH=TREE python -P benchmarks/kernel_repeat.py ...` from a folder
 without a tidem tree.
 """
@@ -46,7 +49,7 @@ def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
         checkpoint.restore(solver, *_checkpoint(Path(run_dir), loaded, model))
     model = solver.model
     advance(solver, 20)
-    n, t, dt = solver.n, solver.t, solver.dt
+    n, t, dt = solver.n, solver.t, 0.0  # module docstring: the history stays as it is
     # as most steps run it: no contact counts and overlaps for the host (kernels/contact.py)
     kernels = {"contact passes": lambda: solver._forces(n, t, dt, 1, 0)}
     if model.features.heat:  # a step between two evaluations of the conduction (heat.conduction_interval)
