@@ -5,8 +5,10 @@ Algorithm (O(N) per rebuild):
    cell order (counting sort); note each particle's slab (`kernels/geometry.py`, `slab_layout`)
    and list the particles of each slab in index order (`slab_list` from `slab_start[s]`: a serial
    pass, so that the contact pass sweeps each slab in the same order on any thread count);
-2. for every particle i, scan the 27 cells around it (as nine runs of three cells along z,
-   which are adjacent in the sorted index) and keep every j != i with
+2. for every particle i, scan the 27 cells around it but the layer behind along the slab axis,
+   whose particles own their pairs with i (slabs are one cell layer thick: 18 cells, as six runs of
+   three cells along z, adjacent in the sorted index, or nine runs of two for a z slab axis), and keep
+   every j != i with
    |x_j - x_i| < r_i + r_j + skin that i *owns*: a pair is listed once, in the row of the
    particle in the slab before the other's, or, in one slab (or in two slabs that are each other's
    successor), in the row of the lower `ident` (the particle's scene index, which a storage
@@ -48,6 +50,12 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     # the neighbour cells along each axis: -1, 0, +1, or on a periodic axis of fewer than three
     # cells each of its cells once (0, +1 wrapped), so that no cell is scanned twice
     span = [(0, cells[a]) if per[a] and cells[a] < 3 else (-1, 2) for a in range(3)]
+    # Slabs one cell layer thick (`tidem.model.neighbour_grid`): the layer behind i's along the slab axis
+    # is the slab before i's, whose particles own their pairs with i, unless that slab is also the one
+    # after (two slabs around a periodic axis) or i's own (one slab). Its cells are then not scanned.
+    axis = grid.slab_axis
+    if n_slabs == cells[axis] and n_slabs >= (3 if per[axis] else 2):
+        span[axis] = (0, 2)
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     capacity = S.x.shape[0]
     MOVED = K  # a `src` no slot has: the slot holds its new history (move_rows)
@@ -121,7 +129,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                     for part in ti.static(range(span[2][1] - span[2][0] if per[2] else 1)):
                         # the z column of cells is one run of sorted_idx (z varies fastest in cell_id);
                         # a periodic z takes it in parts, one per cell
-                        z0, z1 = c0[2] - 1, c0[2] + 1
+                        z0, z1 = c0[2] + span[2][0], c0[2] + span[2][1] - 1
                         if ti.static(per[2]):
                             z0 = (c0[2] + part + span[2][0] + cells[2]) % cells[2]
                             z1 = z0

@@ -88,7 +88,8 @@ def slab_axis_for(cells, gravity) -> int:
 def slab_layout(grid: Grid) -> tuple[int, int]:
     """(axis, count) of the slabs that the contact pass sweeps (`kernels/contact.py`): the grid's
     slab axis cut into as many slabs as it has cells, rounded down to an even number (one slab for a
-    single cell). A slab is at least a cell wide, so a listed pair's particles lie in the same slab
+    single cell; `tidem.model.neighbour_grid` gives that axis an even count, so that each slab is one
+    layer of cells). A slab is at least a cell wide, so a listed pair's particles lie in the same slab
     or in neighbouring ones. The layout depends on the grid only (never on the thread count), so the
     sums, and a float64 run, are the same on any number of threads."""
     cells = grid.cells[grid.slab_axis]
@@ -101,7 +102,7 @@ def make_slabs(grid: Grid):
     axis; -1 past the ends of an open one)."""
     axis, count = slab_layout(grid)
     lo = grid.lo[axis]
-    inv_width = count / grid.length[axis]
+    inv_width = 1.0 / (grid.length[axis] / count)  # as `cell_coord`'s: a slab one cell thick is that cell's layer
     periodic = grid.periodic[axis]
 
     @ti.func

@@ -93,12 +93,17 @@ class Model:
 def neighbour_grid(lo, lengths, periodic, capacity: int, reach: float, gravity=(0.0, 0.0, 0.0)) -> Grid:
     """The broad phase's cell grid over the domain: cells at least `reach` wide (largest
     diameter + skin + gas lens), coarsened for a sparse, huge domain to at most
-    max(64 capacity, 2^20) cells; its slab axis chosen by `gravity` (`kernels/geometry.py`)."""
+    max(64 capacity, 2^20) cells; its slab axis chosen by `gravity` (`kernels/geometry.py`), with an
+    even count of cells along it (one fewer where it was odd), so that each slab of the contact
+    passes is one layer of cells and the neighbour build skips the layer behind
+    (`kernels/broadphase.py`)."""
     cells = [max(1, int(lengths[a] / reach)) for a in range(3)]
     while math.prod(cells) > max(64 * capacity, 1 << 20):
         cells = [max(min(c, 3) if periodic[a] else 1, c // 2) for a, c in enumerate(cells)]
-    return Grid(lo=tuple(lo), length=tuple(lengths), periodic=periodic, cells=tuple(cells),
-                slab_axis=slab_axis_for(cells, gravity))
+    axis = slab_axis_for(cells, gravity)
+    if cells[axis] >= 3 and cells[axis] % 2:
+        cells[axis] -= 1
+    return Grid(lo=tuple(lo), length=tuple(lengths), periodic=periodic, cells=tuple(cells), slab_axis=axis)
 
 
 def neighbour_slots(num, d_max: float, d_min: float, fluid_layer: float) -> int:
