@@ -7,7 +7,8 @@ Algorithm (O(N) per rebuild):
    pass, so that the contact pass sweeps each slab in the same order on any thread count);
 2. for every particle i, scan the 27 cells around it but the layer behind along the slab axis,
    whose particles own their pairs with i (slabs are one cell layer thick: 18 cells, as six runs of
-   three cells along z, adjacent in the sorted index, or nine runs of two for a z slab axis), and keep
+   three cells along z, adjacent in the sorted index, or nine runs of two for a z slab axis; which
+   candidates lie in i's slab and which in the next one follows from the cell runs), and keep
    every j != i with
    |x_j - x_i| < r_i + r_j + skin that i *owns*: a pair is listed once, in the row of the
    particle in the slab before the other's, or, in one slab (or in two slabs that are each other's
@@ -54,7 +55,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     # is the slab before i's, whose particles own their pairs with i, unless that slab is also the one
     # after (two slabs around a periodic axis) or i's own (one slab). Its cells are then not scanned.
     axis = grid.slab_axis
-    if n_slabs == cells[axis] and n_slabs >= (3 if per[axis] else 2):
+    layers = n_slabs == cells[axis] and n_slabs >= (3 if per[axis] else 2)
+    if layers:
         span[axis] = (0, 2)
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     capacity = S.x.shape[0]
@@ -136,16 +138,32 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         else:
                             z0, z1 = ti.max(z0, 0), ti.min(z1, cells[2] - 1)
                         first, last = cell_id(ti.Vector([c[0], c[1], z0])), cell_id(ti.Vector([c[0], c[1], z1]))
-                        for s in range(S.cell_start[first], S.cell_start[last] + S.cell_count[last]):
+                        end = S.cell_start[last] + S.cell_count[last]
+                        # with `layers`, the candidates before `ahead_from` lie in i's slab, the others in the next
+                        ahead_from = end
+                        if ti.static(layers and axis == 0):
+                            ahead_from = ti.select(dx == 0, end, S.cell_start[first])
+                        elif ti.static(layers and axis == 1):
+                            ahead_from = ti.select(dy == 0, end, S.cell_start[first])
+                        elif ti.static(layers and per[2]):
+                            if ti.static(part == 1):  # (span[2] = (0, 2): part 0 is i's layer)
+                                ahead_from = S.cell_start[first]
+                        elif ti.static(layers):
+                            ahead_from = ti.select(z1 > c0[2], S.cell_start[last], end)
+                        for s in range(S.cell_start[first], end):
                             # without a branch: write every candidate into the next free slot (the next one
                             # overwrites it unless it is kept), which spares the mispredicted jumps of an
                             # unpredictable test
                             j = S.sorted_idx[s]
                             dist2 = min_image(S.x[j] - xi).norm_sqr()
                             rsum = ri + S.radius[j]
-                            sj = S.slab[j]
-                            tie = (sj == si) | ((sj == ahead) & (sj == behind))
-                            owned = ti.select(tie, ident < S.ident[j], sj == ahead)
+                            owned = False
+                            if ti.static(layers):  # in i's slab the lower scene index owns a pair, in the next i
+                                owned = (s >= ahead_from) | (ident < S.ident[j])
+                            else:
+                                sj = S.slab[j]
+                                tie = (sj == si) | ((sj == ahead) & (sj == behind))
+                                owned = ti.select(tie, ident < S.ident[j], sj == ahead)
                             # step 3's sort key: partner + (0 if it touches i, else capacity)
                             S.nbr_new[i, ti.min(count, K - 1)] = j + ti.select(dist2 < rsum * rsum, 0, capacity)
                             count += ti.cast(dist2 < (rsum + skin) * (rsum + skin), ti.i32) * ti.cast(owned, ti.i32)

@@ -63,12 +63,17 @@ def touching_first(S, n, lengths, periodic):
 
 
 THIN = np.array([0.02, 0.0055, 0.0055])  # y and z: 2 search cells of the 2.6 mm reach (2 mm spheres, skin 0.3)
+TALL = np.array([0.012, 0.012, 0.04])  # slabs along z (15 cells, 14 slabs)
+DEEP = np.array([0.012, 0.04, 0.012])  # slabs along y
 
 
 @pytest.mark.parametrize("periodic, hi, n", [(["x", "y"], None, 400), ([], None, 400), (["z"], None, 400),
-                                             (["x", "y", "z"], None, 400), (["y"], THIN, 40), (["y", "z"], THIN, 40)])
+                                             (["x", "y", "z"], None, 400), (["y"], THIN, 40), (["y", "z"], THIN, 40),
+                                             ([], TALL, 400), (["z"], TALL, 400), (["y"], DEEP, 400)])
 def test_neighbour_list_matches_brute_force(solver_for, periodic, hi, n):
-    """Also for periodic axes of two search cells (a slab a few grains deep), each scanned once."""
+    """Also for periodic axes of two search cells (a slab a few grains deep), each scanned once, and
+    for slabs along each axis (the build skips the layer behind and tells i's layer from the next by
+    the cell runs: `kernels/broadphase.py`)."""
     rng = np.random.default_rng(11)
     lo, hi = np.array([0.0, 0.0, 0.0]), np.array([0.02, 0.018, 0.015]) if hi is None else hi
     x = random_spheres(rng, n, lo + 0.001, hi - 0.001, 0.002)
@@ -79,7 +84,10 @@ def test_neighbour_list_matches_brute_force(solver_for, periodic, hi, n):
         numerics={"skin": 0.3, "max_neighbors": 64},
     )
     s = solver_for(raw)
-    assert all(s.model.grid.cells[a] == 2 for a in range(3) if hi[a] < 0.01), "thin axes must have two cells"
+    if hi is THIN:
+        assert all(s.model.grid.cells[a] == 2 for a in range(3) if hi[a] < 0.01), "thin axes must have two cells"
+    if hi is TALL or hi is DEEP:
+        assert s.model.grid.slab_axis == int(np.argmax(hi)), "slabs along the long axis"
     S = s.state
     r = S.radius.to_numpy()
     lengths = hi - lo
