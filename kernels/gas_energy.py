@@ -161,13 +161,15 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
                         hw_tw = hw * G.wall_T[I]
                 G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw_tw) + extra) \
                     / (rho_c * G.eps[I] * vol + dt * (G.H[I] + hw))
-                if ti.static(tube_walls):
-                    if hw > 0.0:
-                        flow = hw * (G.wall_T[I] - G.T_new[I])
-                        ti.atomic_add(G.wall_rate[G.wall_k[I]], flow)
-                        ti.atomic_add(G.wall_energy[G.wall_k[I]], dt * flow)
         for I in ti.grouped(G.T):
             G.T[I] = G.T_new[I]
+        if ti.static(tube_walls):
+            ti.loop_config(serialize=True)  # each tube's heat flow summed in cell order: the same bits every run
+            for I in ti.grouped(G.T):
+                if G.solid[I] == 0 and G.wall_A[I] > 0.0:
+                    flow = wall_conductance(I) * (G.wall_T[I] - G.T[I])
+                    G.wall_rate[G.wall_k[I]] += flow
+                    G.wall_energy[G.wall_k[I]] += dt * flow
 
     kernels = dict(upwind=upwind, interior_diffusion=interior_diffusion)
     if heat:
