@@ -51,11 +51,11 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     # the neighbour cells along each axis: -1, 0, +1, or on a periodic axis of fewer than three
     # cells each of its cells once (0, +1 wrapped), so that no cell is scanned twice
     span = [(0, cells[a]) if per[a] and cells[a] < 3 else (-1, 2) for a in range(3)]
-    # Slabs one cell layer thick (`tidem.model.neighbour_grid`): the layer behind i's along the slab axis
-    # is the slab before i's, whose particles own their pairs with i, unless that slab is also the one
-    # after (two slabs around a periodic axis) or i's own (one slab). Its cells are then not scanned.
+    # Slabs are layers of cells (`slab_layout`): the layer behind i's along the slab axis is the slab
+    # before i's, whose particles own their pairs with i, unless that slab is also the one after (two
+    # slabs around a periodic axis) or i's own (one slab). Its cells are then not scanned.
     axis = grid.slab_axis
-    layers = n_slabs == cells[axis] and n_slabs >= (3 if per[axis] else 2)
+    layers = n_slabs >= (3 if per[axis] else 2)
     if layers:
         span[axis] = (0, 2)
     zero3 = ti.Vector([0.0, 0.0, 0.0])
@@ -141,10 +141,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         end = S.cell_start[last] + S.cell_count[last]
                         # with `layers`, the candidates before `ahead_from` lie in i's slab, the others in the next
                         ahead_from = end
-                        if ti.static(layers and axis == 0):
-                            ahead_from = ti.select(dx == 0, end, S.cell_start[first])
-                        elif ti.static(layers and axis == 1):
-                            ahead_from = ti.select(dy == 0, end, S.cell_start[first])
+                        if ti.static(layers and axis < 2):  # the whole run lies in the next layer, or none
+                            ahead_from = ti.select(c[axis] == c0[axis], end, S.cell_start[first])
                         elif ti.static(layers and per[2]):
                             if ti.static(part == 1):  # (span[2] = (0, 2): part 0 is i's layer)
                                 ahead_from = S.cell_start[first]

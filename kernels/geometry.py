@@ -86,31 +86,28 @@ def slab_axis_for(cells, gravity) -> int:
 
 
 def slab_layout(grid: Grid) -> tuple[int, int]:
-    """(axis, count) of the slabs that the contact pass sweeps (`kernels/contact.py`): the grid's
-    slab axis cut into as many slabs as it has cells, rounded down to an even number (one slab for a
-    single cell; `tidem.model.neighbour_grid` gives that axis an even count, so that each slab is one
-    layer of cells). A slab is at least a cell wide, so a listed pair's particles lie in the same slab
+    """(axis, count) of the slabs that the contact pass sweeps (`kernels/contact.py`): one slab per
+    layer of cells along the grid's slab axis, whose cell count `tidem.model.neighbour_grid` makes
+    even (or one or two). A slab is a cell wide, so a listed pair's particles lie in the same slab
     or in neighbouring ones. The layout depends on the grid only (never on the thread count), so the
     sums, and a float64 run, are the same on any number of threads."""
     cells = grid.cells[grid.slab_axis]
-    return grid.slab_axis, (cells - cells % 2 if cells >= 2 else 1)
+    if cells > 2 and cells % 2:
+        raise ValueError(f"slab axis of {cells} cells: the passes need an even count (tidem.model.neighbour_grid)")
+    return grid.slab_axis, cells
 
 
 def make_slabs(grid: Grid):
     """Return (count, slab_of, succ, pred): the slab count of `slab_layout` and Taichi funcs for the
-    slab of a position and the slab after and before slab s along the axis (wrapped on a periodic
-    axis; -1 past the ends of an open one)."""
+    slab of a position (its cell's layer) and the slab after and before slab s along the axis
+    (wrapped on a periodic axis; -1 past the ends of an open one)."""
     axis, count = slab_layout(grid)
-    lo = grid.lo[axis]
-    inv_width = 1.0 / (grid.length[axis] / count)  # as `cell_coord`'s: a slab one cell thick is that cell's layer
     periodic = grid.periodic[axis]
+    _min_image, _wrap, cell_coord, _cell_id = make_geometry(grid)
 
     @ti.func
     def slab_of(x):
-        s = ti.cast(ti.floor((x[axis] - lo) * inv_width), ti.i32)
-        if ti.static(periodic):
-            s = s % count
-        return ti.min(ti.max(s, 0), count - 1)
+        return cell_coord(x)[axis]
 
     @ti.func
     def succ(s):
