@@ -54,10 +54,11 @@ SPREAD = 1024
 
 
 def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
-                      track_contact_time: bool = False, single_material: bool = False, heat: bool = False,
+                      track_contact_time: bool = False, one_pair: list[float] | None = None, heat: bool = False,
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
-                      surface_reach: float = 0.0, grain_scale: float = 1.0, atomic: bool | None = None):
+                      surface_reach: float = 0.0, grain_scale: float = 1.0, atomic: bool | None = None,
+                      uniform: tuple[float, float] | None = None):
     """Return a namespace of the kernel `forces(n, t, dt, conduct, diag)` (both passes), `passes(then)`,
     which makes the Taichi func of both passes that calls the Taichi func then(i, t, dt, drift, kick) on
     every particle whose sums are complete (`kernels/integrate.py` fuses the kick with them); `finish(i, t)` (the
@@ -66,7 +67,10 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     m evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
     0; the surfaces' heat flows of the last evaluation hold); S.conduct[None] tells the kick. `diag` = 1
     also fills ovl and ncontact (module docstring).
-    `single_material` loads the pair parameters once per particle; `heat` adds conduction
+    `one_pair`: the material-pair parameter vector where all particles are of one material, and `uniform`:
+    (radius, mass) where all have the same; the pair loop then takes them as constants of the kernel
+    instead of loading them for every pair (12 % of the passes of the peer bed, whose products of
+    constants the compiler then folds, `benchmarks/README.md`). `heat` adds conduction
     (kernels/heat.py) to the same loop, adding to q [W] and the heat flow into each surface with a
     temperature, surf_rate[s] [W] (into the bed > 0), and with `angle_bins` the heat flow from each tube
     by angle omega of the contact point from the top of the tube, tube_bin_rate[k, b] (omega =
@@ -105,6 +109,27 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     K = S.nbr.shape[1]
     hist = S.ft.dtype  # float32 with numerics.precision = 'mixed' (tidem.state), else fp
 
+    single = one_pair is not None
+    p_one = one_pair if single else [0.0] * S.pp.n  # unused where the pairs load theirs
+    same = uniform is not None
+    r_all, m_all = uniform if same else (0.0, 0.0)
+
+    @ti.func
+    def radius_of(i):
+        """Particle i's radius: a constant of the kernel where all particles have the same (`uniform`)."""
+        r = r_all
+        if ti.static(not same):
+            r = S.radius[i]
+        return r
+
+    @ti.func
+    def mass_of(i):
+        """Particle i's mass, as `radius_of`."""
+        m = m_all
+        if ti.static(not same):
+            m = S.mass[i]
+        return m
+
     @ti.func
     def wide(v):
         """A value read from the rows, in the kernels' float type."""
@@ -120,7 +145,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     def separation(xi, ri, j, x: ti.template()):
         """Minimum-image separation x_j - x_i (positions `x`), r_j, r_i + r_j and the squared distance."""
         d = min_image(x[j] - xi)
-        rj = S.radius[j]
+        rj = radius_of(j)
         return d, rj, ri + rj, d.norm_sqr()
 
     @ti.func
@@ -134,9 +159,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
 
     @ti.func
     def pair_params(mat_i, j, p_same):
-        """The material-pair parameter vector of i and j (loaded once per particle for one material)."""
+        """The material-pair parameter vector of i and j (constants where all particles are of one material)."""
         p = p_same
-        if ti.static(not single_material):
+        if ti.static(not single):
             p = S.pp[mat_i, S.mat[j]]
         return p
 
@@ -172,7 +197,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     def surface_contact(i, s, t):
         """Overlap, unit normal (particle -> surface) and surface velocity for surface s."""
         xi = S.x[i]
-        r = S.radius[i]
+        r = radius_of(i)
         delta = -1.0
         n = ti.Vector([0.0, 0.0, 1.0])
         u = zero3
@@ -256,8 +281,8 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     def visit(i, t, dt, conduct, diag):
         """Particle i's pairs (adding the reactions to the partners), walls and tubes, and gravity."""
         xi = S.x[i]
-        ri = S.radius[i]
-        mi = S.mass[i]
+        ri = radius_of(i)
+        mi = mass_of(i)
         wi = S.w[i]
         vi = S.v[i]
         mat_i = S.mat[i]
@@ -266,7 +291,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         worst = 0.0
         touching = 0
         heat_in = 0.0
-        p_same = S.pp[0, 0]
+        p_same = ti.Vector(p_one)
         if ti.static(pairs):  # contact.model = 'none' compiles no pair loop
             # software pipelining: the next listed partner's distance (its loads and square root) is taken
             # while this pair's contact law runs, instead of after it (10-14 % of the pass on the peer bed;
@@ -285,7 +310,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     delta = rsum - dist
                     wj = S.w[j]
                     v_rel = vi - S.v[j] + (ri * wi + rj * wj).cross(nrm)
-                    mj = S.mass[j]
+                    mj = mass_of(j)
                     share = 1.0 / ((mi + mj) * rsum)  # one division for m* = mi mj / (mi + mj) and R*
                     m_eff = mi * mj * rsum * share
                     r_eff = ri * rj * (mi + mj) * share

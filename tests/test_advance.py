@@ -94,3 +94,35 @@ def test_atomic_sums_follow_the_slab_sums(solver_for, monkeypatch):
     for name in ("x", "v", "w", "T"):
         a, b = getattr(slabs.state, name).to_numpy(), getattr(atomic.state, name).to_numpy()
         assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max(), name
+
+
+def test_one_size_and_material_as_constants_follow_the_loaded_values(solver_for, monkeypatch):
+    """Where all particles have one radius and mass and one material, the contact passes take them and
+    the pair parameters as constants of the kernel (`tidem.solver.uniform_particles`, `one_pair`)
+    instead of loading them: the same bed as with the loads, to rounding; the bed with a second size
+    or material loads them."""
+    import tidem.solver
+    from tidem.model import build_model
+    from tidem.scene.load import validate
+    from tidem.solver import one_pair, uniform_particles
+
+    raw = hot_and_cold_bed()
+    constants = sheared(solver_for(raw))
+    assert uniform_particles(constants.model) is not None
+    assert one_pair(constants.model) is not None
+    monkeypatch.setattr(tidem.solver, "uniform_particles", lambda model: None)
+    monkeypatch.setattr(tidem.solver, "one_pair", lambda model: None)
+    loads = sheared(solver_for(raw))
+    for _ in range(100):
+        constants.step()
+        loads.step()
+    assert constants.rebuilds >= 2 and constants.state.ncontact.to_numpy().sum() > constants.n
+    for name in ("x", "v", "w", "T"):
+        a, b = getattr(constants.state, name).to_numpy(), getattr(loads.state, name).to_numpy()
+        assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max(), name
+    raw["particles"][1]["diameter"] = {"distribution": "mono", "value": 0.00199}
+    two_sizes = build_model(validate(raw))
+    assert uniform_particles(two_sizes) is None and one_pair(two_sizes) is not None
+    raw["materials"]["steel"] = dict(raw["materials"]["glass"], density=7800.0)
+    raw["particles"][0]["material"] = "steel"
+    assert one_pair(build_model(validate(raw))) is None
