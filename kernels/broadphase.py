@@ -32,18 +32,21 @@ error that names the setting to raise (never a silent drop).
 import taichi as ti
 
 from .geometry import make_geometry, make_slabs
+from .sizes import make_sizes
 
 
 def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False,
-                          after=()):
+                          after=(), uniform: tuple[float, float] | None = None):
     """Return the kernel `rebuild(n)`, which refreshes `S.nbr`, `S.nbr_n`, the slabs (`S.slab`,
     `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, then the Taichi funcs
     f(n) in `after`, in one kernel launch).
 
     S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
-    grow) each row also records the particle's radius at the build, `S.r_build`.
+    grow) each row also records the particle's radius at the build, `S.r_build`. `uniform`: (radius, mass)
+    of every particle (`kernels/sizes.py`), or None.
     """
     min_image, _wrap, cell_coord, cell_id = make_geometry(grid)
+    radius_of, _mass_of = make_sizes(S, uniform)
     n_slabs, slab_of, succ, pred = make_slabs(grid)
     cells = grid.cells
     per = grid.periodic
@@ -113,7 +116,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 S.nbr_count[i] = 0
                 continue
             xi = S.x[i]
-            ri = S.radius[i]
+            ri = radius_of(i)
             si = S.slab[i]
             ahead, behind = succ(si), pred(si)
             ident = S.ident[i]
@@ -154,7 +157,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                             # unpredictable test
                             j = S.sorted_idx[s]
                             dist2 = min_image(S.x[j] - xi).norm_sqr()
-                            rsum = ri + S.radius[j]
+                            rsum = ri + radius_of(j)
                             owned = False
                             if ti.static(layers):  # in i's slab the lower scene index owns a pair, in the next i
                                 owned = (s >= ahead_from) | (ident < S.ident[j])

@@ -43,6 +43,7 @@ import taichi as ti
 from .contact_laws import make_contact_response
 from .geometry import make_geometry, make_slabs
 from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radiation
+from .sizes import make_sizes
 
 # Loop iterations per worker in the slab loops. Taichi's CPU runtime (1.7) runs a parallel loop of fewer
 # than about a thousand iterations on one thread and splits a longer one into one block of consecutive
@@ -111,24 +112,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
 
     single = one_pair is not None
     p_one = one_pair if single else [0.0] * S.pp.n  # unused where the pairs load theirs
-    same = uniform is not None
-    r_all, m_all = uniform if same else (0.0, 0.0)
-
-    @ti.func
-    def radius_of(i):
-        """Particle i's radius: a constant of the kernel where all particles have the same (`uniform`)."""
-        r = r_all
-        if ti.static(not same):
-            r = S.radius[i]
-        return r
-
-    @ti.func
-    def mass_of(i):
-        """Particle i's mass, as `radius_of`."""
-        m = m_all
-        if ti.static(not same):
-            m = S.mass[i]
-        return m
+    radius_of, mass_of = make_sizes(S, uniform)
 
     @ti.func
     def wide(v):

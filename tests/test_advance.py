@@ -98,20 +98,18 @@ def test_atomic_sums_follow_the_slab_sums(solver_for, monkeypatch):
 
 def test_one_size_and_material_as_constants_follow_the_loaded_values(solver_for, monkeypatch):
     """Where all particles have one radius and mass and one material, the contact passes take them and
-    the pair parameters as constants of the kernel (`tidem.solver.uniform_particles`, `one_pair`)
+    the pair parameters as constants of the kernel (`Model.uniform_particles`, `Model.one_pair`)
     instead of loading them: the same bed as with the loads, to rounding; the bed with a second size
     or material loads them."""
-    import tidem.solver
-    from tidem.model import build_model
+    from tidem.model import Model, build_model
     from tidem.scene.load import validate
-    from tidem.solver import one_pair, uniform_particles
 
     raw = hot_and_cold_bed()
     constants = sheared(solver_for(raw))
-    assert uniform_particles(constants.model) is not None
-    assert one_pair(constants.model) is not None
-    monkeypatch.setattr(tidem.solver, "uniform_particles", lambda model: None)
-    monkeypatch.setattr(tidem.solver, "one_pair", lambda model: None)
+    assert constants.model.uniform_particles() is not None
+    assert constants.model.one_pair() is not None
+    monkeypatch.setattr(Model, "uniform_particles", lambda model: None)
+    monkeypatch.setattr(Model, "one_pair", lambda model: None)
     loads = sheared(solver_for(raw))
     for _ in range(100):
         constants.step()
@@ -120,9 +118,10 @@ def test_one_size_and_material_as_constants_follow_the_loaded_values(solver_for,
     for name in ("x", "v", "w", "T"):
         a, b = getattr(constants.state, name).to_numpy(), getattr(loads.state, name).to_numpy()
         assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max(), name
+    monkeypatch.undo()
     raw["particles"][1]["diameter"] = {"distribution": "mono", "value": 0.00199}
     two_sizes = build_model(validate(raw))
-    assert uniform_particles(two_sizes) is None and one_pair(two_sizes) is not None
+    assert two_sizes.uniform_particles() is None and two_sizes.one_pair() is not None
     raw["materials"]["steel"] = dict(raw["materials"]["glass"], density=7800.0)
     raw["particles"][0]["material"] = "steel"
-    assert one_pair(build_model(validate(raw))) is None
+    assert build_model(validate(raw)).one_pair() is None

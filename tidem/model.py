@@ -68,6 +68,22 @@ class Model:
     averaging: AveragingLayout | None = None
     coarse_grain: np.ndarray | None = None  # k of each particle's group: a parcel of k^3 grains (1: a grain)
 
+    def uniform_particles(self) -> tuple[float, float] | None:
+        """(radius, mass) where all particles have the same and keep it (no reactions), else None: the
+        contact passes then take them as constants (`kernels/contact.py`)."""
+        r, m = self.radius, self.mass
+        if self.features.reactions or len(r) == 0 or r.min() != r.max() or m.min() != m.max():
+            return None
+        return float(r[0]), float(m[0])
+
+    def one_pair(self) -> list[float] | None:
+        """The material-pair parameters where all particles are of one material (walls and tubes may be
+        of others), else None: the contact passes then take them as constants."""
+        m = self.material
+        if len(m) == 0 or m.min() != m.max():
+            return None
+        return [float(v) for v in self.pair_params[m[0], m[0]]]
+
     @property
     def scene(self):
         return self.loaded.scene

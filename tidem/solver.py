@@ -52,23 +52,6 @@ def static_surfaces(model: Model) -> int:
     return sum(1 << s for s, fixed in enumerate(still) if fixed)
 
 
-def uniform_particles(model: Model) -> tuple[float, float] | None:
-    """(radius, mass) where every particle has the same and keeps it (no reactions), else None."""
-    r, m = model.radius, model.mass
-    if model.features.reactions or len(r) == 0 or r.min() != r.max() or m.min() != m.max():
-        return None
-    return float(r[0]), float(m[0])
-
-
-def one_pair(model: Model) -> list[float] | None:
-    """The material-pair parameters where all particles are of one material (walls and tubes may be of
-    others), else None."""
-    m = model.material
-    if len(m) == 0 or m.min() != m.max():
-        return None
-    return [float(v) for v in model.pair_params[m[0], m[0]]]
-
-
 class Solver:
     """Advance a Model's State in time."""
 
@@ -113,14 +96,14 @@ class Solver:
         model, f, S = self.model, self.model.features, self.state
         forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes, f.n_tubes,
                                    model.wall_slots, model.gravity, S, f.contact_time,
-                                   one_pair(model), f.heat, model.angle_bins, model.fluid_layer,
+                                   model.one_pair(), f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
-                                   model.skin + model.heat_reach, model.grain_scale, uniform=uniform_particles(model))
+                                   model.skin + model.heat_reach, model.grain_scale, uniform=model.uniform_particles())
         self._rebuild = None
         if f.contacts:  # one launch: the list, then the surfaces in reach (culling)
             after = (forces.mark_near,) if forces.mark_near is not None else ()
             self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
-                                                      f.rolling, f.hysteretic, S, f.growth, after))
+                                                      f.rolling, f.hysteretic, S, f.growth, after, model.uniform_particles()))
         return forces
 
     def _build_integrators(self, forces) -> None:

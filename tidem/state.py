@@ -132,9 +132,16 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     cells, the material-pair and material-surface tables, planes and tubes."""
     N, K, W = model.capacity, model.max_neighbors, model.wall_slots
     feat = model.features
-    # What the pair loop reads of a partner sits together in memory (array of structs).
-    hot = [p.make(k, n=3) for k in ("x", "v", "w")] + [p.make("radius"), p.make("mass"), p.make("mat", ti.i32)]
+    # What the pair loop reads of a partner sits together in memory (array of structs); the radius and mass,
+    # and the material, only where particles differ in them (else the loop takes constants and they are
+    # fields of their own: Model.uniform_particles, one_pair).
+    hot = [p.make(k, n=3) for k in ("x", "v", "w")]
+    apart = []
+    (apart if model.uniform_particles() else hot).extend([p.make("radius"), p.make("mass")])
+    (apart if model.one_pair() else hot).append(p.make("mat", ti.i32))
     p.fb.dense(ti.i, N).place(*hot)
+    for fld in apart:
+        p.fb.dense(ti.i, N).place(fld)
     p.S.particle_fields += ["x", "v", "w", "radius", "mass", "mat"]
     p.per_particle((N,), "ident", ti.i32)
     if feat.growth:
