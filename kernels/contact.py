@@ -54,8 +54,8 @@ from .sizes import make_sizes
 SPREAD = 1024
 
 
-def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int, W: int, gravity, S,
-                      track_contact_time: bool = False, one_pair: list[float] | None = None, heat: bool = False,
+def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: list[dict], W: int, gravity, S,
+                      track_contact_time: bool = False, one_material: tuple | None = None, heat: bool = False,
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
                       surface_reach: float = 0.0, grain_scale: float = 1.0, atomic: bool | None = None,
@@ -68,10 +68,11 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     m evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
     0; the surfaces' heat flows of the last evaluation hold); S.conduct[None] tells the kick. `diag` = 1
     also fills ovl and ncontact (module docstring).
-    `one_pair`: the material-pair parameter vector where all particles are of one material, and `uniform`:
-    (radius, mass) where all have the same; the pair loop then takes them as constants of the kernel
-    instead of loading them for every pair (12 % of the passes of the peer bed, whose products of
-    constants the compiler then folds, `benchmarks/README.md`). `heat` adds conduction
+    `planes` and `tubes` (`tidem.surfaces`) are compiled in as constants. `one_material`: where all particles
+    are of one material, its material-pair parameter vector and its material-surface vector for each
+    surface, and `uniform`: (radius, mass) where all have the same; the pair loop then takes them as
+    constants of the kernel instead of loading them for every pair (12 % of the passes of the peer
+    bed, whose products of constants the compiler then folds, `benchmarks/README.md`). `heat` adds conduction
     (kernels/heat.py) to the same loop, adding to q [W] and the heat flow into each surface with a
     temperature, surf_rate[s] [W] (into the bed > 0), and with `angle_bins` the heat flow from each tube
     by angle omega of the contact point from the top of the tube, tube_bin_rate[k, b] (omega =
@@ -103,15 +104,17 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
     g = ti.Vector(list(gravity))
-    n_surf = n_planes + n_tubes
+    n_planes = len(planes)
+    moving = [any(p["vel"]) for p in planes]
+    n_surf = n_planes + len(tubes)
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     cg = float(grain_scale)
     fp = ti.lang.impl.current_cfg().default_fp
     K = S.nbr.shape[1]
     hist = S.ft.dtype  # float32 with numerics.precision = 'mixed' (tidem.state), else fp
 
-    single = one_pair is not None
-    p_one = one_pair if single else [0.0] * S.pp.n  # unused where the pairs load theirs
+    single = one_material is not None
+    p_one, s_one = one_material if single else (None, None)
     radius_of, mass_of = make_sizes(S, uniform)
 
     @ti.func
@@ -142,29 +145,37 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         return nrm, dist
 
     @ti.func
-    def pair_params(mat_i, j, p_same):
+    def pair_params(mat_i, j):
         """The material-pair parameter vector of i and j (constants where all particles are of one material)."""
-        p = p_same
-        if ti.static(not single):
-            p = S.pp[mat_i, S.mat[j]]
-        return p
+        if ti.static(single):
+            return ti.Vector(p_one)
+        else:
+            return S.pp[mat_i, S.mat[j]]
 
     @ti.func
-    def touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj):
+    def surface_params(mat_i, s: ti.template()):
+        """The material-surface parameter vector of i and surface s, as `pair_params`."""
+        if ti.static(single):
+            return ti.Vector(s_one[s])
+        else:
+            return S.ps[mat_i, s]
+
+    @ti.func
+    def touching_heat(i, j, mat_i, r_eff, delta, ri, rj):
         """Heat flow into i from a touching partner j: contact spot, plus the gas lens."""
-        p_pair = pair_params(mat_i, j, p_same)
+        p_pair = pair_params(mat_i, j)
         h_pair = spot_conductance(p_pair, r_eff, delta)
         if ti.static(pfp):
             h_pair += lens(p_pair, r_eff, -delta, fluid_layer * ti.min(ri, rj))
         return h_pair * (S.T[j] - S.T[i])
 
     @ti.func
-    def lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist):
+    def lens_heat(i, j, mat_i, ri, rj, rsum, dist):
         """Heat flow into i through the gas lens from a partner j at distance `dist` that does not touch it."""
         flow = 0.0
         gap = dist - rsum
         if gap < fluid_layer * ti.min(ri, rj):
-            h_gas = lens(pair_params(mat_i, j, p_same), ri * rj / rsum, gap, fluid_layer * ti.min(ri, rj))
+            h_gas = lens(pair_params(mat_i, j), ri * rj / rsum, gap, fluid_layer * ti.min(ri, rj))
             flow = h_gas * (S.T[j] - S.T[i])
         return flow
 
@@ -178,30 +189,45 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 S.touch_end[i] = t
 
     @ti.func
-    def surface_contact(i, s, t):
-        """Overlap, unit normal (particle -> surface) and surface velocity for surface s."""
+    def along(v, w: ti.template()):
+        """v . w for a constant w, with the products by its zero components left out (the compiler may
+        not drop them itself: 0 x NaN is NaN)."""
+        out = 0.0
+        for a in ti.static(range(3)):
+            if ti.static(w[a] != 0.0):
+                out += v[a] * w[a]
+        return out
+
+    @ti.func
+    def surface_contact(i, s: ti.template(), t):
+        """Overlap, unit normal (particle -> surface) and surface velocity for surface s. The surfaces'
+        geometry is constant (`planes`, `tubes`), compiled into the kernel: an axis-aligned wall costs
+        one subtraction, a tube no product along its axis."""
         xi = S.x[i]
         r = radius_of(i)
         delta = -1.0
         n = ti.Vector([0.0, 0.0, 1.0])
         u = zero3
-        if s < n_planes:
-            t0 = S.plane_t[s][0]
-            t1 = S.plane_t[s][1]
-            tc = ti.min(ti.max(t, t0), t1)
-            p = S.plane_p0[s] + S.plane_vel[s] * (tc - t0)
-            if t > t0 and t < t1:
-                u = S.plane_vel[s]
-            dist = (xi - p).dot(S.plane_n[s])
+        if ti.static(s < n_planes):
+            t0, t1 = planes[s]["t"]
+            p = ti.Vector(planes[s]["p0"])
+            if ti.static(moving[s]):
+                tc = ti.min(ti.max(t, t0), t1)
+                p += ti.Vector(planes[s]["vel"]) * (tc - t0)
+                if t > t0 and t < t1:
+                    u = ti.Vector(planes[s]["vel"])
+            dist = along(xi - p, planes[s]["n"])
             if dist > -r:
                 delta = r - dist
-                n = -S.plane_n[s]
+                n = -ti.Vector(planes[s]["n"])
         else:
-            k = s - n_planes
-            d = min_image(xi - S.tube_c[k]) * S.tube_mask[k]
+            d = min_image(xi - ti.Vector(tubes[s - n_planes]["c"]))
+            for a in ti.static(range(3)):
+                if ti.static(tubes[s - n_planes]["mask"][a] == 0.0):
+                    d[a] = 0.0
             dist = d.norm()
             if dist > 0.0:
-                delta = r + S.tube_r[k] - dist
+                delta = r + tubes[s - n_planes]["r"] - dist
                 n = -d / dist
         return delta, n, u
 
@@ -275,7 +301,6 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
         worst = 0.0
         touching = 0
         heat_in = 0.0
-        p_same = ti.Vector(p_one)
         if ti.static(pairs):  # contact.model = 'none' compiles no pair loop
             # software pipelining: the next listed partner's distance (its loads and square root) is taken
             # while this pair's contact law runs, instead of after it (10-14 % of the pass on the peer bed;
@@ -311,7 +336,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         mr = wide(S.mr[i, k])
                     f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
                         nrm, delta, v_rel, wi - wj, m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
-                        pair_params(mat_i, j, p_same), wide(S.ft[i, k]), mr, dmax, dt)
+                        pair_params(mat_i, j), wide(S.ft[i, k]), mr, dmax, dt)
                     force += f
                     torque += (ri * nrm).cross(f_t) + m_roll
                     add(S.f, j, -f)
@@ -323,7 +348,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                         S.dmax[i, k] = ti.cast(dmax_new, hist)
                     if ti.static(heat):
                         if conduct:
-                            flow = touching_heat(i, j, mat_i, p_same, r_eff, delta, ri, rj)
+                            flow = touching_heat(i, j, mat_i, r_eff, delta, ri, rj)
                             heat_in += flow
                             add(S.q, j, -conduct * flow)
                     if diag:
@@ -335,7 +360,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                 else:
                     if ti.static(pfp):
                         if conduct:
-                            flow = lens_heat(i, j, mat_i, p_same, ri, rj, rsum, dist_k)
+                            flow = lens_heat(i, j, mat_i, ri, rj, rsum, dist_k)
                             heat_in += flow
                             add(S.q, j, -conduct * flow)
                     S.ft[i, k] = zero3
@@ -380,7 +405,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             mr = S.wmr[i, slot]
                         f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
                             nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
-                            S.ps[mat_i, s], S.wft[i, slot], mr, dmax, dt)
+                            surface_params(mat_i, s), S.wft[i, slot], mr, dmax, dt)
                         force += f
                         torque += (ri * nrm).cross(f_t) + m_roll
                         S.wft[i, slot] = xi_new
@@ -388,9 +413,9 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                             if conduct and S.surf_T[s] > 0.0:
                                 b = tube_bin(s, nrm)
                                 t_wall = wall_temperature(s, b)
-                                flow = wall_conductance(S.ps[mat_i, s], ri, delta, cg) * (t_wall - S.T[i])
+                                flow = wall_conductance(surface_params(mat_i, s), ri, delta, cg) * (t_wall - S.T[i])
                                 if ti.static(radiation):
-                                    flow += wall_radiation(S.ps[mat_i, s], ri, t_wall, S.T[i])
+                                    flow += wall_radiation(surface_params(mat_i, s), ri, t_wall, S.T[i])
                                 heat_in += flow
                                 surface_heat(s, b, flow)
                         if ti.static(rolling):
@@ -407,7 +432,7 @@ def make_force_kernel(grid, law: int, rolling: bool, n_planes: int, n_tubes: int
                     if ti.static(pfp):
                         if conduct and -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
                             b = tube_bin(s, nrm)
-                            flow = cg * lens(S.ps[mat_i, s], ri, -delta, fluid_layer * ri) * (
+                            flow = cg * lens(surface_params(mat_i, s), ri, -delta, fluid_layer * ri) * (
                                 wall_temperature(s, b) - S.T[i])
                             heat_in += flow
                             surface_heat(s, b, flow)

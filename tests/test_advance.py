@@ -98,7 +98,7 @@ def test_atomic_sums_follow_the_slab_sums(solver_for, monkeypatch):
 
 def test_one_size_and_material_as_constants_follow_the_loaded_values(solver_for, monkeypatch):
     """Where all particles have one radius and mass and one material, the contact passes take them and
-    the pair parameters as constants of the kernel (`Model.uniform_particles`, `Model.one_pair`)
+    the pair parameters as constants of the kernel (`Model.uniform_particles`, `Model.one_material`)
     instead of loading them: the same bed as with the loads, to rounding; the bed with a second size
     or material loads them."""
     from tidem.model import Model, build_model
@@ -107,9 +107,9 @@ def test_one_size_and_material_as_constants_follow_the_loaded_values(solver_for,
     raw = hot_and_cold_bed()
     constants = sheared(solver_for(raw))
     assert constants.model.uniform_particles() is not None
-    assert constants.model.one_pair() is not None
+    assert constants.model.one_material() is not None
     monkeypatch.setattr(Model, "uniform_particles", lambda model: None)
-    monkeypatch.setattr(Model, "one_pair", lambda model: None)
+    monkeypatch.setattr(Model, "one_material", lambda model: None)
     loads = sheared(solver_for(raw))
     for _ in range(100):
         constants.step()
@@ -121,7 +121,7 @@ def test_one_size_and_material_as_constants_follow_the_loaded_values(solver_for,
     monkeypatch.undo()
     raw["particles"][1]["diameter"] = {"distribution": "mono", "value": 0.00199}
     two_sizes = build_model(validate(raw))
-    assert two_sizes.uniform_particles() is None and two_sizes.one_pair() is not None
+    assert two_sizes.uniform_particles() is None and two_sizes.one_material() is not None
     raw["materials"]["steel"] = dict(raw["materials"]["glass"], density=7800.0)
     raw["particles"][0]["material"] = "steel"
-    assert build_model(validate(raw)).one_pair() is None
+    assert build_model(validate(raw)).one_material() is None

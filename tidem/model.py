@@ -76,13 +76,14 @@ class Model:
             return None
         return float(r[0]), float(m[0])
 
-    def one_pair(self) -> list[float] | None:
-        """The material-pair parameters where all particles are of one material (walls and tubes may be
-        of others), else None: the contact passes then take them as constants."""
+    def one_material(self) -> tuple[list[float], list[list[float]]] | None:
+        """Where all particles are of one material (walls and tubes may be of others): its material-pair
+        parameters and its material-surface parameters for each surface, else None; the contact passes
+        then take them as constants."""
         m = self.material
         if len(m) == 0 or m.min() != m.max():
             return None
-        return [float(v) for v in self.pair_params[m[0], m[0]]]
+        return self.pair_params[m[0], m[0]].tolist(), self.surface_params[m[0]].tolist()
 
     @property
     def scene(self):

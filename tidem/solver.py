@@ -94,9 +94,9 @@ class Solver:
         """The neighbour builder (none without contacts) and the force kernels (`kernels/contact.py`:
         contact law, walls and tubes, heat conduction and radiation in the same pair loop)."""
         model, f, S = self.model, self.model.features, self.state
-        forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, f.n_planes, f.n_tubes,
+        forces = make_force_kernel(model.grid, f.law if f.contacts else LINEAR, f.rolling, model.planes, model.tubes,
                                    model.wall_slots, model.gravity, S, f.contact_time,
-                                   model.one_pair(), f.heat, model.angle_bins, model.fluid_layer,
+                                   model.one_material(), f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
                                    model.skin + model.heat_reach, model.grain_scale, uniform=model.uniform_particles())
         self._rebuild = None

@@ -134,11 +134,11 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     feat = model.features
     # What the pair loop reads of a partner sits together in memory (array of structs); the radius and mass,
     # and the material, only where particles differ in them (else the loop takes constants and they are
-    # fields of their own: Model.uniform_particles, one_pair).
+    # fields of their own: Model.uniform_particles, one_material).
     hot = [p.make(k, n=3) for k in ("x", "v", "w")]
     apart = []
     (apart if model.uniform_particles() else hot).extend([p.make("radius"), p.make("mass")])
-    (apart if model.one_pair() else hot).append(p.make("mat", ti.i32))
+    (apart if model.one_material() else hot).append(p.make("mat", ti.i32))
     p.fb.dense(ti.i, N).place(*hot)
     for fld in apart:
         p.fb.dense(ti.i, N).place(fld)
