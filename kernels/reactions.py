@@ -37,7 +37,9 @@ T += dt q / (m c) with the new mass, so reaction heat lands exactly in the parti
 sensible heat c T dm of the mass that reacted is counted in rsum[ENTHALPY_OUT]; a removed
 particle hands the heat of its last step, and the gas exchange the gas already charged for the
 rest of the gas step (`steps_left` DEM steps), back to its gas cells (`Qs`, added at the next
-gas step). Per-step stability (share of the mass used in one step) is refused at set-up
+gas step). What particles give their gas cells (the O2 a char particle takes, a removed particle's
+heat) is booked per particle (`gas_book`) in the parallel loop and added to the cells after it, in
+particle order: the same sums, bit for bit, on any thread count. Per-step stability (share of the mass used in one step) is refused at set-up
 (tidem.reactions); the last step of a particle's life is clamped to what it has left.
 """
 
@@ -56,6 +58,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
     """Return `react(n, t, dt, steps_left)` for the reactions of `tidem.reactions.reaction_constants`."""
     gas = G is not None
     timing = any(r["kind"] == SUBL for r in reactions)
+    burning = any(r["kind"] == CHAR for r in reactions)
     if gas:
         cic, corner, weight = make_cic(gg)
 
@@ -86,7 +89,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         refund = heat_left
         if ti.static(gas):
             refund += S.gH[i] * (S.gT[i] - S.T[i]) * dt * steps_left
-            deposit(G.Qs, S.x[i], refund)
+            S.gas_book[i][1] = refund
         S.rsum[REFUND] += refund
         S.active[i] = 0
         S.v[i] = ti.Vector([0.0, 0.0, 0.0])
@@ -114,7 +117,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
             dm = ti.min(rate * dt, m)
             if dm > 0.0:
                 o2 = dm * rc["o2_per_c"]
-                deposit(G.o2_sink, S.x[i], o2)
+                S.gas_book[i][0] = o2
                 S.rsum[REACTED] += dm
                 S.rsum[O2_USED] += o2
                 S.rsum[HEAT_RELEASED] += dm * rc["heat_per_c"]
@@ -199,6 +202,15 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                 for k in ti.static(range(len(steps))):
                     if S.rx[i] == k:
                         removed += steps[k](i, t, dt, steps_left, T, m, c)
+        if ti.static(gas):
+            ti.loop_config(serialize=True)  # particle order, whatever the thread count
+            for i in range(n):
+                booked = S.gas_book[i]
+                if booked[0] != 0.0 or booked[1] != 0.0:
+                    if ti.static(burning):
+                        deposit(G.o2_sink, S.x[i], booked[0])
+                    deposit(G.Qs, S.x[i], booked[1])
+                    S.gas_book[i] = ti.Vector([0.0, 0.0])
         return removed
 
     return react

@@ -28,8 +28,9 @@ FORMAT = 2  # 2: each pair in its owner's row only, the slabs (kernels/broadphas
 # Scene keys that may change between a run and its resume: output cadence, rendering, the
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
-# Rewritten before use (the conduction flag by every force pass, the rest by every neighbour build): not kept.
-TRANSIENT = ("conduct", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
+# Rewritten before use (the conduction flag by every force pass, the reactions' gas book by every reaction
+# step, the rest by every neighbour build): not kept.
+TRANSIENT = ("conduct", "gas_book", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
              "cell_count", "cell_start", "cell_fill", "pcell", "sorted_idx")
 
 

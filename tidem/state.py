@@ -242,6 +242,8 @@ def _place_reaction_fields(p: _Placer, model: Model) -> None:
     N = model.capacity
     p.per_particle((N,), "rx", ti.i32)
     p.place((N_SUMS,), "rsum", ti.f64)
+    if model.features.gas:  # what each particle gives its gas cells in a step (kernels/reactions.py)
+        p.place((N,), "gas_book", n=2)
     if "sublimation" in model.features.reactions:
         p.per_particle((N,), "rt0")
         p.per_particle((N,), "rt1")
