@@ -129,7 +129,7 @@ class _Placer:
 
 def _place_contact_fields(p: _Placer, model: Model) -> None:
     """Particles, neighbour list and wall slots with their contact history, the broad phase's
-    cells, the material-pair and material-surface tables, planes and tubes."""
+    cells, the material-pair and material-surface tables, the tubes (for the averaging)."""
     N, K, W = model.capacity, model.max_neighbors, model.wall_slots
     feat = model.features
     # What the pair loop reads of a partner sits together in memory (array of structs); the radius and mass,
@@ -181,11 +181,7 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     P = model.pair_params.shape[0]
     p.place((P, P), "pp", n=cl.N_PARAMS)
     p.place((P, model.surface_params.shape[1]), "ps", n=cl.N_PARAMS)
-    NP = max(len(model.planes), 1)
-    NT = max(len(model.tubes), 1)
-    for name in ("plane_p0", "plane_n", "plane_vel"):
-        p.place((NP,), name, n=3)
-    p.place((NP,), "plane_t", n=2)
+    NT = max(len(model.tubes), 1)  # the contact kernel takes planes and tubes as constants; averaging reads tubes
     p.place((NT,), "tube_c", n=3)
     p.place((NT,), "tube_mask", n=3)
     p.place((NT,), "tube_r")
@@ -335,14 +331,9 @@ def _fill_heat(S: State, model: Model) -> None:
 
 
 def _fill_surfaces(S: State, model: Model) -> None:
-    """The parameter tables and the geometry of planes and tubes."""
+    """The parameter tables and the geometry of the tubes."""
     S.pp.from_numpy(model.pair_params)
     S.ps.from_numpy(model.surface_params)
-    if model.planes:
-        S.plane_p0.from_numpy(np.array([p["p0"] for p in model.planes], float))
-        S.plane_n.from_numpy(np.array([p["n"] for p in model.planes], float))
-        S.plane_vel.from_numpy(np.array([p["vel"] for p in model.planes], float))
-        S.plane_t.from_numpy(np.array([p["t"] for p in model.planes], float))
     if model.tubes:
         S.tube_c.from_numpy(np.array([t["c"] for t in model.tubes], float))
         S.tube_mask.from_numpy(np.array([t["mask"] for t in model.tubes], float))
