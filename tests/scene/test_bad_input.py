@@ -140,6 +140,15 @@ def test_distribution_defaults_to_mono(tmp_path):
     assert run_check(path).exit_code == 0
 
 
+def test_a_plain_number_is_one_diameter(tmp_path):
+    from tidem.scene.load import load
+
+    path = impact_scene(tmp_path, lambda r: r["particles"][0].update(diameter=0.0191))
+    assert load(str(path)).scene.particles[0].diameter.value == 0.0191
+    path = impact_scene(tmp_path, lambda r: r["particles"][0].update(diameter=-0.0191))
+    assert "particles[0].diameter.value: must be > 0 (got -0.0191)" in run_check(path).output
+
+
 def test_forced_dt_is_accepted(tmp_path):
     path = impact_scene(tmp_path, lambda r: r["numerics"].update(dt=1e-4, force_dt=True))
     assert run_check(path).exit_code == 0

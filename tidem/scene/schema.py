@@ -122,6 +122,8 @@ class ParticleGroup(Strict):
     @classmethod
     def _mono_by_default(cls, data):
         d = data.get("diameter") if isinstance(data, dict) else None
+        if isinstance(d, (int, float)) and not isinstance(d, bool):  # diameter = 0.001: one size
+            d = {"value": d}
         if isinstance(d, dict) and "distribution" not in d:
             data = {**data, "diameter": {"distribution": "mono", **d}}
         return data
