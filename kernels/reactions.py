@@ -39,8 +39,9 @@ particle hands the heat of its last step, and the gas exchange the gas already c
 rest of the gas step (`steps_left` DEM steps), back to its gas cells (`Qs`, added at the next
 gas step). What particles give their gas cells (the O2 a char particle takes, a removed particle's
 heat) is booked per particle (`gas_book`) in the parallel loop and added to the cells after it, in
-particle order: the same sums, bit for bit, on any thread count. Per-step stability (share of the mass used in one step) is refused at set-up
-(tidem.reactions); the last step of a particle's life is clamped to what it has left.
+particle order: the same sums, bit for bit, on any thread count. Per-step stability (share of the
+mass used in one step) is refused at set-up (tidem.reactions); the last step of a particle's life
+is clamped to what it has left.
 """
 
 import math
