@@ -9,19 +9,17 @@ def make_sizes(S, uniform: tuple[float, float] | None):
     """Return Taichi funcs (radius_of(i), mass_of(i)); `uniform`: (radius, mass) of every particle, or None."""
     same = uniform is not None
     r_all, m_all = uniform if same else (0.0, 0.0)
+    return _reader(S.radius, r_all, same), _reader(S.mass, m_all, same)
+
+
+def _reader(field, value: float, constant: bool):
+    """A Taichi func of i: `value` where `constant`, else field[i]."""
 
     @ti.func
-    def radius_of(i):
-        r = r_all
-        if ti.static(not same):
-            r = S.radius[i]
-        return r
+    def read(i):
+        v = value
+        if ti.static(not constant):
+            v = field[i]
+        return v
 
-    @ti.func
-    def mass_of(i):
-        m = m_all
-        if ti.static(not same):
-            m = S.mass[i]
-        return m
-
-    return radius_of, mass_of
+    return read
