@@ -5,15 +5,22 @@ the contact law (`contact_laws.make_contact_response`) updates the pair's histor
 row and gives the force F and rolling moment M on the owner i; the partner j receives -F and the
 torque r_j n x F - M (n the unit normal from i to j: Newton's third law, the contact point r_j n
 from j). Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
-owner's slab or in the next one, so (`passes`)
-1. pass 1: each even slab s, one thread per slab, sweeps s in index order (its pairs, walls
-   and tubes), adding to the sums of slabs s and s + 1, which the last kick-drift zeroed
-   (`kernels/integrate.py`; and the contact counts, where the host reads them, here);
-2. pass 2, once every even slab is swept: each odd slab likewise, then, when the step goes on,
-   integrates (`then`) the particles of that slab and the next: their sums are complete (each
-   receives only from its own slab and the one before);
-no two threads then write the same particle and every sum is taken in the same order whatever the
-thread count: float64 runs are bit-reproducible without atomics. Each particle is read and written
+owner's slab or in the next one. The slabs are grouped into blocks of consecutive slabs
+(`block_count`: 8 to 16 blocks of two or more slabs, one block below four slabs), so (`passes`)
+1. pass 1: each block, one thread per block, sweeps its slabs but the last in order, each in index
+   order (its pairs, walls and tubes), adding to the sums of that slab and the next, which the last
+   kick-drift zeroed (`kernels/integrate.py`; and the contact counts, where the host reads them,
+   here); when the step goes on, it integrates (`then`) each slab after the block's first as soon as
+   it is swept: its sums are complete (each slab receives only from itself and the one before), and
+   no pair left to evaluate reads it;
+2. pass 2, once every block is through pass 1: each block's last slab likewise, then it integrates
+   that slab and the next block's first one, now complete too;
+so a slab's particles are mostly still in cache when they are swept after being added to as
+partners, and integrated right after (2-5 % of a step of the peer bed at 10k and 50k against
+sweeping even slabs, then odd ones, `benchmarks/README.md`; the blocks also share out better
+among threads than eight or nine single slabs). No two threads then write the same particle, and
+every sum is taken in the same order whatever the thread count (the blocks depend on the slab count
+only): float64 runs are bit-reproducible without atomics. Each particle is read and written
 about once per step, which is what the large beds, whose fields do not fit in cache, wait on. With
 `atomic` (a GPU, where a slab per thread would leave it idle) every particle of a pass is a thread
 of its own and the sums are atomic: the same forces, summed in an order that varies from run to run.
@@ -52,6 +59,17 @@ from .sizes import make_sizes
 # time from shared counters (`S.slab_next`): the host thread starts at once while the others are
 # still waking up (tens of microseconds here), and a slab of more work holds up no one.
 SPREAD = 1024
+BLOCKS = 16  # the most blocks of slabs in a pass (`block_count`)
+
+
+def block_count(n_slabs: int) -> int:
+    """Blocks of consecutive slabs that the passes hand out (`passes`): an even number (two threads
+    take as many), at most BLOCKS, each of at least two slabs; one below four slabs. Depends on the
+    slab count only, never on the thread count (module docstring)."""
+    if n_slabs < 4:
+        return 1
+    b = min(n_slabs // 2, BLOCKS)
+    return b - b % 2
 
 
 def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: list[dict], W: int, gravity, S,
@@ -94,10 +112,8 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     if atomic is None:
         atomic = ti.lang.impl.current_cfg().arch != ti.cpu
     flat = atomic or not pairs  # one loop over the particles, no slabs
-    n_slabs, _slab_of, succ, _pred = make_slabs(grid)
-    n_odd = n_slabs // 2
-    n_even = n_slabs - n_odd
-    lone_first = 0 if grid.periodic[grid.slab_axis] and n_slabs >= 2 else 1  # slab 0 follows no odd slab
+    n_slabs, _slab_of, succ, pred = make_slabs(grid)
+    n_blocks = block_count(n_slabs)
     workers = max(1, ti.lang.impl.current_cfg().cpu_max_num_threads)
     pfp = heat and fluid_layer > 0.0
     min_image, _wrap, _cc, _cid = make_geometry(grid)
@@ -446,6 +462,11 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             add(S.ncontact, i, touching)
 
     @ti.func
+    def block_start(b):
+        """The first slab of block b (block n_blocks: n_slabs)."""
+        return b * n_slabs // n_blocks
+
+    @ti.func
     def clear_slab(s):
         for p in range(S.slab_start[s], S.slab_start[s + 1]):
             clear(S.slab_list[p])
@@ -475,10 +496,10 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         that calls the Taichi func then(i, t, dt, drift, kick) on every particle once its sums are
         complete and keeps the largest value it returns in S.max_disp[None] (the squared displacements
         of the kick-drifts): one atomic per worker, not one per particle. One parallel loop: each
-        worker takes even slabs from a shared counter (S.slab_next[0]) while any are left, waits until
-        every even slab is swept (S.slab_next[1] counts them), then takes odd slabs (S.slab_next[2]).
-        A worker waits only for slabs that another one took and is sweeping, so the loop finishes on
-        any number of threads, one included; it saves the start of a second parallel loop (about
+        worker takes blocks from a shared counter (S.slab_next[0]) while any are left, waits until
+        every block is through pass 1 (S.slab_next[1] counts them), then takes blocks' last slabs
+        (S.slab_next[2]). A worker waits only for blocks that another one took and is sweeping, so the
+        loop finishes on any number of threads, one included; it saves the start of a second parallel loop (about
         50 us on two threads, `benchmarks/README.md`). With `flat`: two loops over the particles."""
         kicks = then is not None
 
@@ -511,35 +532,34 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                     S.slab_next[c] = 0
                 for e in range(workers * SPREAD):
                     if e % SPREAD == 0:
-                        while True:  # pass 1
-                            m = ti.atomic_add(S.slab_next[0], 1)
-                            if m >= n_even:
-                                break
-                            s = 2 * m
-                            if diag:
-                                clear_slab(s)
-                                after = succ(s)
-                                if after >= 0 and after != s:
-                                    clear_slab(after)
-                            sweep_slab(s, t, dt, conduct, diag)
-                            ti.atomic_add(S.slab_next[1], 1)
-                        while ti.atomic_add(S.slab_next[1], 0) < n_even:  # the odd slabs' sums start in pass 1
-                            pass
                         largest = 0.0
-                        while True:  # pass 2
-                            m = ti.atomic_add(S.slab_next[2], 1)
-                            if m >= n_odd + lone_first:
+                        while True:  # pass 1
+                            b = ti.atomic_add(S.slab_next[0], 1)
+                            if b >= n_blocks:
                                 break
-                            if m < n_odd:
-                                s = 2 * m + 1
+                            lo, hi = block_start(b), block_start(b + 1)
+                            if diag:
+                                for s in range(lo, hi):
+                                    clear_slab(s)
+                            for s in range(lo, hi - 1):
                                 sweep_slab(s, t, dt, conduct, diag)
                                 if ti.static(kicks):
-                                    largest = ti.max(largest, integrate_slab(s, t, dt, drift, kick))
-                                    after = succ(s)
-                                    if after >= 0:
-                                        largest = ti.max(largest, integrate_slab(after, t, dt, drift, kick))
-                            elif ti.static(kicks):
-                                largest = ti.max(largest, integrate_slab(0, t, dt, drift, kick))
+                                    if s > lo or pred(s) < 0:  # complete: its predecessor is swept
+                                        largest = ti.max(largest, integrate_slab(s, t, dt, drift, kick))
+                            ti.atomic_add(S.slab_next[1], 1)
+                        while ti.atomic_add(S.slab_next[1], 0) < n_blocks:  # pass 2 adds to the blocks' first slabs
+                            pass
+                        while True:  # pass 2
+                            b = ti.atomic_add(S.slab_next[2], 1)
+                            if b >= n_blocks:
+                                break
+                            last = block_start(b + 1) - 1
+                            sweep_slab(last, t, dt, conduct, diag)
+                            if ti.static(kicks):
+                                largest = ti.max(largest, integrate_slab(last, t, dt, drift, kick))
+                                after = succ(last)  # the next block's first slab
+                                if after >= 0 and after != last:
+                                    largest = ti.max(largest, integrate_slab(after, t, dt, drift, kick))
                         if ti.static(kicks):
                             ti.atomic_max(S.max_disp[None], largest)
 

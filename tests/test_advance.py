@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 import taichi as ti
 
+from tidem.kernels.contact import BLOCKS, block_count
+from tidem.kernels.geometry import slab_layout
 from tests.test_storage_order import shuffled_bed
 
 FIELDS = ("x", "v", "w", "f", "tq", "T", "ft", "mr", "ncontact", "ovl")
@@ -26,7 +28,7 @@ def hot_and_cold_bed() -> dict:
     raw["materials"]["glass"].update(conductivity=1.0, heat_capacity=800.0)
     raw["particles"] = [dict(group, name="hot", positions=x[:half], temperature=400.0),
                         dict(group, name="cold", positions=x[half:], temperature=300.0)]
-    raw["heat"] = {}
+    raw["heat"] = {"fluid_layer": 0.2}  # cells 2.3 mm wide: 10 slabs along x, in blocks of two and three
     return raw
 
 
@@ -56,11 +58,27 @@ def test_advance_gives_the_bits_of_single_steps(solver_for, optimized):
         fused.advance(k)
     assert fused.steps == single.steps == 200 and fused.t == single.t
     assert single.rebuilds >= 3, "the window must hold neighbour rebuilds (and storage sorts)"
+    assert max(block_sizes(slab_layout(single.model.grid)[1])) >= 3, "slabs kicked in the first pass, too"
     assert single.state.ncontact.to_numpy().sum() > single.n, "the bed must be in contact"
     T = single.state.T.to_numpy()
     assert np.ptp(T[T < 399.0]) > 0.05, "heat must flow between the halves"
     for name in FIELDS:
         assert np.array_equal(getattr(single.state, name).to_numpy(), getattr(fused.state, name).to_numpy()), name
+
+
+def block_sizes(n_slabs: int) -> list[int]:
+    blocks = block_count(n_slabs)
+    return [(b + 1) * n_slabs // blocks - b * n_slabs // blocks for b in range(blocks)]
+
+
+def test_blocks_are_even_in_number_and_two_slabs_or_more():
+    """Two threads take as many blocks; a block of one slab would be swept in the second pass
+    beside the slab before it, both adding to its particles."""
+    assert [block_count(n) for n in (1, 2, 3)] == [1, 1, 1]
+    for n in range(4, 300, 2):
+        sizes = block_sizes(n)
+        assert len(sizes) % 2 == 0 and len(sizes) <= BLOCKS and min(sizes) >= 2 and sum(sizes) == n, n
+    assert len(block_sizes(90)) == BLOCKS
 
 
 def test_steps_until_stops_at_the_first_output_or_window_end(solver_for):
