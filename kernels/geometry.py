@@ -76,13 +76,19 @@ def make_geometry(grid: Grid):
     return min_image, wrap, cell_coord, cell_id
 
 
+ACROSS_MIN = 16  # cells across gravity that make eight blocks of two slabs (`kernels/contact.py`)
+
+
 def slab_axis_for(cells, gravity) -> int:
     """The axis to cut into slabs: the one with the most cells across gravity (a bed is about as
-    dense everywhere across it, while along gravity it may fill the lower part only), or the one
-    along gravity where that has at least twice as many."""
+    dense everywhere across it, while along gravity it may fill the lower part only; and where it is
+    x, each slab is one stretch of storage, which `tidem.storage_order` sorts x, then y, then z), unless
+    that has fewer than ACROSS_MIN cells and the axis along gravity more (a tall, narrow column).
+    Slabs along gravity cut through the storage order: the bubbling and moving beds ran 1.2-1.4x
+    faster with slabs across it (`benchmarks/README.md`, twelfth sitting)."""
     down = max(range(3), key=lambda a: abs(gravity[a])) if any(gravity) else None
     axis = max((a for a in range(3) if a != down), key=lambda a: cells[a])
-    return down if down is not None and cells[down] >= 2 * cells[axis] else axis
+    return down if down is not None and cells[axis] < ACROSS_MIN and cells[down] > cells[axis] else axis
 
 
 def slab_layout(grid: Grid) -> tuple[int, int]:
