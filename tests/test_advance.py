@@ -28,7 +28,8 @@ def hot_and_cold_bed() -> dict:
     raw["materials"]["glass"].update(conductivity=1.0, heat_capacity=800.0)
     raw["particles"] = [dict(group, name="hot", positions=x[:half], temperature=400.0),
                         dict(group, name="cold", positions=x[half:], temperature=300.0)]
-    raw["heat"] = {"fluid_layer": 0.2}  # cells 2.3 mm wide: 10 slabs along x, in blocks of two and three
+    raw["heat"] = {"fluid_layer": 0.2}
+    raw["domain"]["max"][2] = 0.042  # cells 2.3 mm wide: 18 slabs along z (10 cells across), in blocks of two and three
     return raw
 
 
