@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.kernels.geometry import slab_layout
+from tidem.kernels.geometry import slab_axis_for, slab_layout
 
 
 def brute_force_pairs(x, r, skin, lengths, periodic):
@@ -185,3 +185,12 @@ def test_capacity_overflow_is_an_error(solver_for):
     )
     with pytest.raises(RunError, match="numerics.max_neighbors"):
         solver_for(raw)
+
+
+def test_slabs_go_across_gravity_unless_the_column_is_narrow():
+    """Slabs along x are stretches of the x-major storage order (`kernels/geometry.py`, slab_axis_for)."""
+    down = (0.0, 0.0, -9.81)
+    assert slab_axis_for((56, 2, 142), down) == 0  # the bubbling bed: 56 slabs along x, not 142 along z
+    assert slab_axis_for((20, 30, 10), down) == 1
+    assert slab_axis_for((3, 3, 38), down) == 2  # a narrow column
+    assert slab_axis_for((3, 3, 2), down) == 0
