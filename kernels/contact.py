@@ -6,7 +6,8 @@ row and gives the force F and rolling moment M on the owner i; the partner j rec
 torque r_j n x F - M (n the unit normal from i to j: Newton's third law, the contact point r_j n
 from j). Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
 owner's slab or in the next one. The slabs are grouped into blocks of consecutive slabs
-(`block_count`: 8 to 16 blocks of two or more slabs, one block below four slabs), so (`passes`)
+(`block_count`: an even number of blocks, at most 16, each of two slabs or more; one block below
+four slabs), so (`passes`)
 1. pass 1: each block, one thread per block, sweeps its slabs but the last in order, each in index
    order (its pairs, walls and tubes), adding to the sums of that slab and the next, which the last
    kick-drift zeroed (`kernels/integrate.py`; and the contact counts, where the host reads them,
@@ -499,8 +500,9 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         worker takes blocks from a shared counter (S.slab_next[0]) while any are left, waits until
         every block is through pass 1 (S.slab_next[1] counts them), then takes blocks' last slabs
         (S.slab_next[2]). A worker waits only for blocks that another one took and is sweeping, so the
-        loop finishes on any number of threads, one included; it saves the start of a second parallel loop (about
-        50 us on two threads, `benchmarks/README.md`). With `flat`: two loops over the particles."""
+        loop finishes on any number of threads, one included; it saves the start of a second parallel
+        loop (about 50 us on two threads, `benchmarks/README.md`). With `flat`: two loops over the
+        particles."""
         kicks = then is not None
 
         @ti.func

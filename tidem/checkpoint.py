@@ -24,7 +24,9 @@ import numpy as np
 from taichi.lang.field import Field
 
 FILE = "checkpoint.npz"
-FORMAT = 3  # 2: each pair in its owner's row only, the slabs (kernels/broadphase.py); 3: slabs across gravity (the owners change)
+# 2: each pair in its owner's row only, the slabs (kernels/broadphase.py); 3: slabs across gravity
+# (kernels/geometry.py, slab_axis_for), which changes the owners of a bed's pairs
+FORMAT = 3
 # Scene keys that may change between a run and its resume: output cadence, rendering, the
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
@@ -97,8 +99,8 @@ def load(run_dir: Path) -> tuple[dict, dict]:
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         raise CheckpointError(f"{path}: unreadable checkpoint ({exc})") from None
     if meta.get("format") != FORMAT:
-        raise CheckpointError(f"{path}: checkpoint format {meta.get('format')} is not {FORMAT} (made by another version "
-                              "of tidem): start a new run, or resume it with the version that made it")
+        raise CheckpointError(f"{path}: checkpoint format {meta.get('format')} is not {FORMAT} (made by another "
+                              "version of tidem): start a new run, or resume it with the version that made it")
     return meta, arrays
 
 
