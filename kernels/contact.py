@@ -51,6 +51,7 @@ import taichi as ti
 from .contact_laws import make_contact_response
 from .geometry import make_geometry, make_slabs
 from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radiation
+from .ordered import in_order, raise_max
 from .sizes import make_sizes
 
 # Loop iterations per worker in the slab loops. Taichi's CPU runtime (1.7) runs a parallel loop of fewer
@@ -111,7 +112,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     conducts as those grains do (kernels/heat.py). `atomic`: atomic sums, one thread per particle
     (module docstring); None: on any architecture but the CPU."""
     if atomic is None:
-        atomic = ti.lang.impl.current_cfg().arch != ti.cpu
+        atomic = not in_order()
     flat = atomic or not pairs  # one loop over the particles, no slabs
     n_slabs, _slab_of, succ, pred = make_slabs(grid)
     n_blocks = block_count(n_slabs)
@@ -528,7 +529,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                 if ti.static(kicks):
                     for i in range(n):
                         if S.active[i]:
-                            ti.atomic_max(S.max_disp[None], then(i, t, dt, drift, kick))
+                            raise_max(S.max_disp, then(i, t, dt, drift, kick))
             else:
                 for c in ti.static(range(3)):
                     S.slab_next[c] = 0

@@ -29,6 +29,7 @@ import taichi as ti
 
 from .drag import make_drag, make_nusselt
 from .gas_grid import make_cic
+from .ordered import in_order
 
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
@@ -51,6 +52,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
     inv_vol = 1.0 / gg.volume
+    ordered = in_order()
     U = G.u
     B = G.B
     BV = G.Bv
@@ -100,7 +102,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     def deposit_volume(n: ti.i32):
         for I in ti.grouped(G.solid_vol):
             G.solid_vol[I] = 0.0
-        ti.loop_config(serialize=True)  # sums in particle order: bit-identical runs on any thread count
+        if ti.static(ordered):
+            ti.loop_config(serialize=True)  # sums in particle order: bit-identical runs on any thread count
         for i in range(n):
             if S.active[i]:
                 base, frac = cic(S.x[i], -1)
@@ -124,7 +127,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 G.H[I] = 0.0
                 G.HT[I] = 0.0
         rate = 0.0
-        ti.loop_config(serialize=True)  # deposits summed in particle order (determinism)
+        if ti.static(ordered):
+            ti.loop_config(serialize=True)  # deposits summed in particle order (determinism)
         for i in range(n):
             if S.active[i]:
                 x = S.x[i]

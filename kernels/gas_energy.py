@@ -22,6 +22,7 @@ into wall_rate [W] and, over time, wall_energy [J].
 import taichi as ti
 
 from .gas_grid import CLOSED, INLET, INTERIOR
+from .ordered import in_order
 
 
 def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: float, tube_walls: bool,
@@ -33,6 +34,7 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
     per = gg.periodic
     h = ti.Vector(list(gg.h))
     vol = gg.volume
+    ordered = in_order()
     area = ti.Vector([gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]])
     U, K = G.u, G.kind
     unit, cell_index, face_index, face_eps = index.unit, index.cell_index, index.face_index, index.face_eps
@@ -164,7 +166,8 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
         for I in ti.grouped(G.T):
             G.T[I] = G.T_new[I]
         if ti.static(tube_walls):
-            ti.loop_config(serialize=True)  # each tube's heat flow summed in cell order: the same bits every run
+            if ti.static(ordered):
+                ti.loop_config(serialize=True)  # each tube's heat flow summed in cell order: the same bits every run
             for I in ti.grouped(G.T):
                 if G.solid[I] == 0 and G.wall_A[I] > 0.0:
                     flow = wall_conductance(I) * (G.wall_T[I] - G.T[I])

@@ -28,7 +28,27 @@ import taichi as ti
 
 from .gas_energy import make_energy_kernels
 from .gas_grid import CLOSED, INLET, OUTLET, make_cic
+from .ordered import in_order
 SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster, deterministic)
+# The CG keeps its scalars in G.sums (RZ = r.z, DQ = d.q, RZ_NEW = the next r.z, RR = r.r), so that the
+# host launches iterations without reading anything back (`tidem.gas`, _project).
+RZ, DQ, RZ_NEW, RR = range(4)
+GPU_BATCH = 8  # parallel CG iterations per launch on a GPU (`cg_batch`)
+
+
+def serial_solve(cells: int) -> bool:
+    """Whether a grid of `cells` cells solves the pressure in one thread (`cg_serial`): small grids on
+    the CPU; never on a GPU (`kernels/ordered.py`)."""
+    return cells <= SERIAL_CELLS and in_order()
+
+
+def cg_batch() -> int:
+    """Iterations of the parallel CG per launch (`cg_iterate`) and per read of its residual: one on
+    the CPU, where the solve stops at the first iteration within tolerance; GPU_BATCH on a GPU, where
+    each launch and each read from the host waits for the device (the bubbling bed's 130 iterations
+    per solve, a launch per stage and a read per iteration, took 2.9 ms a step on an H100,
+    `benchmarks/README.md`): the solve may go up to GPU_BATCH - 1 iterations past its tolerance."""
+    return 1 if in_order() else GPU_BATCH
 
 
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
@@ -40,7 +60,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     `conduction` Fourier conduction through the gas."""
     cic, corner, weight = make_cic(gg)
     n = gg.cells
-    small = n[0] * n[1] * n[2] <= SERIAL_CELLS
+    small = serial_solve(n[0] * n[1] * n[2])
+    batch = cg_batch()
     per = gg.periodic
     h = ti.Vector(list(gg.h))
     lo = ti.Vector(list(gg.lo))
@@ -167,9 +188,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
         return bb
 
     @ti.kernel
-    def cg_start() -> ti.f64:
-        """r = b + L p (warm start), z = r / diag, d = z; return r.z."""
-        rz = 0.0
+    def cg_start():
+        """r = b + L p (warm start), z = r / diag, d = z; sums[RZ] = r.z."""
+        G.sums[RZ] = 0.0
         for I in ti.grouped(G.p):
             r = G.rhs[I] - apply(G.p, I)
             if G.solid[I] == 1:
@@ -177,42 +198,58 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
             G.cg_r[I] = r
             z = r / G.diag[I]
             G.cg_d[I] = z
-            rz += r * z
-        return rz
+            G.sums[RZ] += r * z
 
-    @ti.kernel
-    def cg_apply() -> ti.f64:
-        """q = -L d; return d.q."""
-        dq = 0.0
+    @ti.func
+    def cg_apply():
+        """q = -L d; sums[DQ] = d.q."""
+        G.sums[DQ] = 0.0
         for I in ti.grouped(G.p):
             q = apply(G.cg_d, I)
             if G.solid[I] == 1:
                 q = 0.0
             G.cg_q[I] = q
-            dq += G.cg_d[I] * q
-        return dq
+            G.sums[DQ] += G.cg_d[I] * q
 
-    @ti.kernel
-    def cg_update(alpha: ti.f64):
-        """p += alpha d, r -= alpha q; sums[0] = r.z, sums[1] = r.r with z = r / diag."""
-        G.sums[0] = 0.0
-        G.sums[1] = 0.0
+    @ti.func
+    def cg_update():
+        """alpha = r.z / d.q (0 once d.q <= 0: the solve has stalled or converged to zero), p += alpha d,
+        r -= alpha q; sums[RZ_NEW] = r.z, sums[RR] = r.r with z = r / diag."""
+        alpha = 0.0
+        if G.sums[DQ] > 0.0:
+            alpha = G.sums[RZ] / G.sums[DQ]
+        G.sums[RZ_NEW] = 0.0
+        G.sums[RR] = 0.0
         for I in ti.grouped(G.p):
             G.p[I] += alpha * G.cg_d[I]
             r = G.cg_r[I] - alpha * G.cg_q[I]
             G.cg_r[I] = r
-            G.sums[0] += r * r / G.diag[I]
-            G.sums[1] += r * r
+            G.sums[RZ_NEW] += r * r / G.diag[I]
+            G.sums[RR] += r * r
 
-    @ti.kernel
-    def cg_direction(beta: ti.f64):
+    @ti.func
+    def cg_direction():
+        """d = z + beta d with beta = r.z (new) / r.z (old); sums[RZ] = the new r.z."""
+        beta = 0.0
+        if G.sums[RZ] > 0.0:
+            beta = G.sums[RZ_NEW] / G.sums[RZ]
+        G.sums[RZ] = G.sums[RZ_NEW]
         for I in ti.grouped(G.p):
             G.cg_d[I] = G.cg_r[I] / G.diag[I] + beta * G.cg_d[I]
 
     @ti.kernel
+    def cg_iterate() -> ti.f64:
+        """cg_batch(cells) CG iterations in one launch, each loop a parallel stage; returns r.r."""
+        for _ in ti.static(range(batch)):
+            cg_apply()
+            cg_update()
+            cg_direction()
+        return G.sums[RR]
+
+    @ti.kernel
     def cg_serial(max_iterations: ti.i32, tol_abs: ti.f64) -> ti.i32:
         """The whole CG solve in one thread (small grids: no launch or thread-pool cost per
-        iteration); returns the iterations, leaves |r|^2 in sums[1]."""
+        iteration); returns the iterations, leaves |r|^2 in sums[RR]."""
         ti.loop_config(serialize=True)
         for _ in range(1):
             rz = 0.0
@@ -255,9 +292,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                 for i, j, k in ti.ndrange(n[0], n[1], n[2]):
                     I = ti.Vector([i, j, k])
                     G.cg_d[I] = G.cg_r[I] / G.diag[I] + beta * G.cg_d[I]
-            G.sums[1] = rr
-            G.sums[0] = it
-        return ti.cast(G.sums[0], ti.i32)
+            G.sums[RR] = rr
+            G.sums[RZ] = it
+        return ti.cast(G.sums[RZ], ti.i32)
 
     @ti.kernel
     def correct():
@@ -318,8 +355,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                 ti.atomic_max(worst, ti.abs(U[c][I]) * dt / h[c])
         return worst
 
-    kernels = dict(predict=predict, assemble=assemble, cg_start=cg_start, cg_apply=cg_apply, cg_update=cg_update,
-                   cg_direction=cg_direction, cg_serial=cg_serial, correct=correct, divergence=divergence, courant=courant)
+    kernels = dict(predict=predict, assemble=assemble, cg_start=cg_start, cg_iterate=cg_iterate, cg_serial=cg_serial,
+                   correct=correct, divergence=divergence, courant=courant)
     index = SimpleNamespace(unit=unit, cell_index=cell_index, face_index=face_index, face_eps=face_eps)
     kernels.update(make_energy_kernels(gg, G, index, rho, mu, heat, rho_c, tube_walls, k_gas, prandtl, sources,
                                        conduction))

@@ -18,6 +18,7 @@ closes by both moves and both growths, so max(move + growth) <= skin / 2 keeps t
 import taichi as ti
 
 from .geometry import make_geometry
+from .ordered import raise_max
 
 
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
@@ -89,7 +90,7 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         S.max_disp[None] = 0.0
         for i in range(n):
             if S.active[i]:
-                ti.atomic_max(S.max_disp[None], drift_particle(i, dt, 0))
+                raise_max(S.max_disp, drift_particle(i, dt, 0))
 
     @ti.func
     def advance_surfaces(dt):
@@ -148,7 +149,7 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         S.max_disp[None] = 0.0
         for i in range(n):
             if S.active[i]:
-                ti.atomic_max(S.max_disp[None], kick_particle(i, t, dt, drift, 1))
+                raise_max(S.max_disp, kick_particle(i, t, dt, drift, 1))
         advance_surfaces(dt)
 
     if forces is None:

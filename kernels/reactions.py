@@ -49,6 +49,7 @@ import math
 import taichi as ti
 
 from .gas_grid import make_cic
+from .ordered import in_order
 
 CHAR, POLY, SUBL = 0, 1, 2
 REACTED, O2_USED, HEAT_RELEASED, LATENT, ENTHALPY_OUT, REFUND, GONE, ESCAPED, MASS_ESCAPED = range(9)
@@ -58,6 +59,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                          W: int = 1):
     """Return `react(n, t, dt, steps_left)` for the reactions of `tidem.reactions.reaction_constants`."""
     gas = G is not None
+    ordered = in_order()
     timing = any(r["kind"] == SUBL for r in reactions)
     burning = any(r["kind"] == CHAR for r in reactions)
     if gas:
@@ -204,7 +206,8 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                     if S.rx[i] == k:
                         removed += steps[k](i, t, dt, steps_left, T, m, c)
         if ti.static(gas):
-            ti.loop_config(serialize=True)  # particle order, whatever the thread count
+            if ti.static(ordered):
+                ti.loop_config(serialize=True)  # particle order, whatever the thread count
             for i in range(n):
                 booked = S.gas_book[i]
                 if booked[0] != 0.0 or booked[1] != 0.0:

@@ -79,11 +79,11 @@ def advance(solver, steps: int) -> None:
         solver.advance(solver.steps_until(lambda t: False, 50, last))
 
 
-def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None = None) -> dict:
-    """Time one case in this process (called in a child process by `run_matrix`)."""
+def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None = None, arch: str = "cpu") -> dict:
+    """Time one case in this process (called in a child process by `run_matrix`) on Taichi's `arch`."""
     from tidem.runtime import ensure_taichi
 
-    ensure_taichi("cpu", precision, threads)
+    ensure_taichi(arch, precision, threads)
     from tidem.model import build_model
     from tidem.scene.load import validate
     from tidem.solver import Solver
@@ -101,15 +101,15 @@ def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None =
     wall = time.perf_counter() - t0
     rss = peak_resident_bytes()
     e = solver.energies()
-    return {"particles": len(x), "precision": precision, "threads": threads, "steps": steps, "loop_s": wall,
+    return {"particles": len(x), "precision": precision, "arch": arch, "threads": threads, "steps": steps, "loop_s": wall,
             "particle_steps_per_s": len(x) * steps / wall, "rebuilds": solver.rebuilds,
             "contacts_per_particle": float(e["coordination"]), "field_bytes_per_particle": model.memory_bytes() / len(x),
             "peak_rss_MiB": rss / 2**20}
 
 
 def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int, out: Path | None,
-               bed: Path | None = None) -> list[dict]:
-    """Run every (size, precision) case in a fresh process and print a table."""
+               bed: Path | None = None, arch: str = "cpu") -> list[dict]:
+    """Run every (size, precision) case in a fresh process on Taichi's `arch` and print a table."""
     if bed is not None:
         sizes = [len(tiled_bed(0, bed)[0])]
     rows = []
@@ -123,14 +123,14 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
         for prec in precisions:
             k = max(200, steps * 10000 // max(n, 10000) if n > 50000 else steps)
             proc = subprocess.run([sys.executable, "-P", "-c", f"import json, tidem.bench as b; "
-                                   f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads}, {str(bed) if bed else None!r})))"],
+                                   f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads}, {str(bed) if bed else None!r}, '{arch}')))"],
                                   capture_output=True, text=True, env=env)
             if proc.returncode != 0:
                 print(f"{n:>8} {prec:>9} failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr else ''}")
                 continue
             row = json.loads(proc.stdout.strip().splitlines()[-1])
             rows.append(row)
-            print(f"{n:>8} {prec:>9} {threads:>7} {k:>6} {row['loop_s']:>8.2f} {row['particle_steps_per_s']:>17.3g} "
+            print(f"{n:>8} {prec:>9} {threads if arch == 'cpu' else arch:>7} {k:>6} {row['loop_s']:>8.2f} {row['particle_steps_per_s']:>17.3g} "
                   f"{row['field_bytes_per_particle']:>20.0f} {row['peak_rss_MiB']:>12.0f}", flush=True)
     if out is not None:
         Path(out).write_text(json.dumps(rows, indent=2))

@@ -31,9 +31,10 @@ FORMAT = 3
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # Rewritten before use (the conduction flag by every force pass, the reactions' gas book by every reaction
-# step, the rest by every neighbour build): not kept.
+# step, `sums` by every energy sum and, in the gas, by every pressure solve, the rest by every neighbour
+# build): not kept.
 TRANSIENT = ("conduct", "gas_book", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
-             "cell_count", "cell_start", "cell_fill", "pcell", "sorted_idx")
+             "cell_count", "cell_start", "cell_fill", "pcell", "sorted_idx", "sums")
 
 
 class CheckpointError(RuntimeError):
@@ -49,7 +50,7 @@ def _fields(solver) -> dict[str, Field]:
             out[f"state/{name}"] = value
     if solver.gas is not None:
         for name, value in sorted(vars(solver.gas.G).items()):
-            if isinstance(value, Field):
+            if isinstance(value, Field) and name not in TRANSIENT:
                 out[f"gas/{name}"] = value
             elif isinstance(value, list):
                 for c, comp in enumerate(value):

@@ -321,6 +321,7 @@ def bench(
                                                 "(float32 and float64) or all")] = "both",
     steps: Annotated[int, typer.Option(help="Timed steps per case (scaled down for large N)")] = 2000,
     threads: Annotated[int, typer.Option(help="CPU threads (with --render: llvmpipe threads)")] = 2,
+    arch: Annotated[str, typer.Option(help="Taichi backend of the steps: cpu, cuda or vulkan")] = "cpu",
     out: Annotated[Optional[Path], typer.Option(help="Write results as JSON here")] = None,
     bed: Annotated[Optional[Path], typer.Option(help="Use this bed instead: a LAMMPS/LIGGGHTS data file "
                                                 "(id type diameter density x y z) or an .npz with 'x'")] = None,
@@ -335,8 +336,10 @@ def bench(
 ):
     """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history),
     with --render frames per second of the renderer, with --profile SCENE a scene's time per step by phase."""
+    if arch not in ("cpu", "cuda", "vulkan"):
+        fail(f"--arch {arch}: choose cpu, cuda or vulkan", 2)
     if profile is not None:
-        _profile(profile, set_, steps, warmup, threads, out, resume)
+        _profile(profile, set_, steps, warmup, threads, out, resume, arch)
         return
     try:
         counts = [int(v) for v in (sizes or ("2000,20000" if render else "10000,50000,200000")).split(",")]
@@ -359,23 +362,26 @@ def bench(
         fail(f"--precision {precision}: choose float32, float64, mixed, both or all", 2)
     if bed is not None and not bed.exists():
         fail(f"--bed {bed}: no such file", 2)
-    run_matrix(counts, runs[precision], steps, threads, out, bed)
+    run_matrix(counts, runs[precision], steps, threads, out, bed, arch)
 
 
 def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, threads: int, out: Optional[Path],
-             resume: Optional[Path]) -> None:
+             resume: Optional[Path], arch: str) -> None:
     """`tidem bench --profile`: a scene's steps timed by phase (`tidem.bench.profile_scene`)."""
     import json
 
     from tidem.bench import profile_scene
     from tidem.phases import format_table
-    from tidem.runtime import ensure_taichi
+    from tidem.runtime import BackendUnavailable, ensure_taichi
     from tidem.solver import RunError
 
     if steps < 1 or warmup < 0:
         fail(f"--steps {steps} --warmup {warmup}: need at least one timed step and no negative warm-up", 2)
     loaded = load_scene(path, sets)
-    ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
+    try:
+        ensure_taichi(arch, loaded.scene.numerics.precision, threads)
+    except BackendUnavailable as exc:
+        fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
     model = build_or_exit(loaded)
     start = _checkpoint(resume, loaded, model) if resume is not None else None
     try:
@@ -384,8 +390,9 @@ def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, thre
         fail(exc.render(), 2)
     except RunError as exc:
         fail(f"{loaded.source}: the run failed during profiling: {exc}", 1)
+    where = f"{threads} threads" if arch == "cpu" else arch
     typer.echo(f"{result['scene']}: {result['particles']} particles, {steps} steps after {warmup} warm-up, "
-               f"{threads} threads, {result['particle_steps_per_s']:.3g} particle-steps/s")
+               f"{where}, {result['particle_steps_per_s']:.3g} particle-steps/s")
     typer.echo(format_table(result["profile"]))
     if out is not None:
         out.write_text(json.dumps(result, indent=2))

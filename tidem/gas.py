@@ -20,7 +20,7 @@ import taichi as ti
 
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.gas_coupling import make_coupling_kernels
-from tidem.kernels.gas_flow import SERIAL_CELLS, make_flow_kernels
+from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
 from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
 from tidem.gas_fields import allocate_gas_fields
@@ -64,6 +64,7 @@ class GasPhase:
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
                                       self.heat and gas.conduction)
+        self.cg_batch = cg_batch()
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
@@ -148,24 +149,17 @@ class GasPhase:
         bb = f["assemble"](dt)
         u_scale = max(float(np.abs(self.inlet).max()) * self.inlet_scale, 1e-3)
         scale = max(math.sqrt(bb), u_scale / min(self.gg.h) * math.sqrt(self.solid.size))
-        if self.solid.size <= SERIAL_CELLS:
+        if serial_solve(self.solid.size):
             it = f["cg_serial"](self.gas.max_iterations, self.tol * scale)
-            self._finish(it, math.sqrt(max(float(G.sums[1]), 0.0)) / scale)
+            self._finish(it, math.sqrt(max(float(G.sums[RR]), 0.0)) / scale)
             return
-        rz = f["cg_start"]()
-        it = 0
-        rr = rz
-        for it in range(1, self.gas.max_iterations + 1):
-            dq = f["cg_apply"]()
-            if dq <= 0.0:
+        f["cg_start"]()
+        it, rr = 0, 0.0
+        while it < self.gas.max_iterations:
+            rr = f["cg_iterate"]()
+            it += self.cg_batch
+            if math.sqrt(max(rr, 0.0)) <= self.tol * scale:
                 break
-            alpha = rz / dq
-            f["cg_update"](alpha)
-            rz_new, rr = float(G.sums[0]), float(G.sums[1])
-            if math.sqrt(rr) <= self.tol * scale:
-                break
-            f["cg_direction"](rz_new / rz)
-            rz = rz_new
         self._finish(it, math.sqrt(max(rr, 0.0)) / scale)
 
     def _finish(self, it: int, residual: float) -> None:

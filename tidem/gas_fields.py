@@ -54,7 +54,7 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
     G.inlet = ti.field(fp)
     fb.dense(ti.ij, gg.cells[:2]).place(G.inlet)
     G.sums = ti.field(fp)
-    fb.dense(ti.i, 2).place(G.sums)
+    fb.dense(ti.i, 4).place(G.sums)
     G.heat_rate = ti.field(fp)  # set by `couple`
     fb.dense(ti.i, 1).place(G.heat_rate)
     if walls is not None:

@@ -1,0 +1,25 @@
+"""Whether the kernels being built take their sums in one fixed order or by atomics.
+
+On the CPU every sum of a run is taken in one order (serial loops over particles or cells, the
+slab passes of `kernels/contact.py`), so float64 runs are bit-reproducible on any thread count. On a
+GPU a loop in one thread leaves thousands of threads idle (the bubbling bed's pressure solve took
+5.8 ms a step in one CUDA thread, `benchmarks/README.md`), so there the same loops run one thread
+per item with atomic sums, whose last bits vary from run to run.
+"""
+
+import taichi as ti
+
+
+def in_order() -> bool:
+    """True on Taichi's CPU backend (sums in a fixed order), False on a GPU (atomic sums)."""
+    return ti.lang.impl.current_cfg().arch == ti.cpu
+
+
+@ti.func
+def raise_max(target: ti.template(), value):
+    """target[None] = max(target[None], value), read first and written only where value is larger:
+    thousands of GPU threads' atomic max on one float64 (a compare-and-swap loop) took 1.1 ms a step
+    of the 10k peer bed on an H100 (`benchmarks/README.md`); after the read only the few that raise
+    it write. The value only grows during a launch, so a thread that reads a larger one may skip."""
+    if value > target[None]:
+        ti.atomic_max(target[None], value)
