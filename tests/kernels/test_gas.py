@@ -296,9 +296,10 @@ def test_bad_gas_input_is_named(gas, fragment):
 
 def test_gpu_form_of_the_gas_follows_the_serial_form(solver_for, monkeypatch):
     """On a GPU the deposits of the coupling are atomic sums over particles in parallel and the
-    pressure solve runs one parallel launch per CG stage (`kernels/ordered.py`); run here on the CPU,
-    that form gives the serial form's bed and gas to rounding and the solver's tolerance. A deposit
-    lost to a race, or a CG stage missing, moves the bed by far more."""
+    pressure solve is the parallel CG in launches of 8 iterations, which may go past its tolerance
+    (`kernels/ordered.py`, `kernels/gas_flow.py`); run here on the CPU, that form gives the serial
+    form's bed and gas to rounding and the CG's tolerance (1e-8). A deposit lost to a race, or a CG
+    stopped early, moves the bed by far more (two iterations: 1e-3)."""
     import tidem.kernels.gas_coupling
     import tidem.kernels.gas_energy
     import tidem.kernels.gas_flow
@@ -310,7 +311,7 @@ def test_gpu_form_of_the_gas_follows_the_serial_form(solver_for, monkeypatch):
     for module in (tidem.kernels.gas_coupling, tidem.kernels.gas_energy, tidem.kernels.gas_flow):
         monkeypatch.setattr(module, "in_order", lambda: False)
     parallel = solver_for(raw)
-    assert not tidem.kernels.gas_flow.serial_solve(parallel.gas.solid.size)
+    assert not tidem.kernels.gas_flow.serial_solve(parallel.gas.solid.size) and parallel.gas.cg_batch == 8
     for _ in range(300):
         serial.step()
         parallel.step()
@@ -318,9 +319,7 @@ def test_gpu_form_of_the_gas_follows_the_serial_form(solver_for, monkeypatch):
     assert np.abs(serial.state.v.to_numpy()).max() > 0.01, "the bed moves"
     for name in ("x", "v", "T"):
         a, b = getattr(serial.state, name).to_numpy(), getattr(parallel.state, name).to_numpy()
-        print(name, np.abs(a - b).max() / np.abs(a).max())
         assert np.abs(a - b).max() <= 1e-7 * np.abs(a).max(), name
     for name in ("p", "T"):
         a, b = getattr(serial.gas.G, name).to_numpy(), getattr(parallel.gas.G, name).to_numpy()
-        print(name, np.abs(a - b).max() / np.abs(a).max())
         assert np.abs(a - b).max() <= 1e-7 * np.abs(a).max(), "gas " + name
