@@ -14,7 +14,8 @@ deposited drag coefficients of `gas_coupling`, per cell volume V):
   pressure:                  div(eps A grad p) = div(eps u*) + (eps^{n+1} - eps^n) / dt,
       a symmetric positive definite system for -p, solved by Jacobi-preconditioned CG to a
       relative residual `tolerance`, warm-started from the last pressure (in one thread
-      for small grids, `cg_serial`; else one parallel launch per CG stage).
+      for small grids on the CPU, `cg_serial`; else in parallel, its scalars kept on the device,
+      one launch per iteration on the CPU and per 8 on a GPU, `cg_iterate`).
 Boundaries: inlet faces at the bottom carry a set superficial velocity (eps_f u_f = U_in);
 the top is a pressure outlet (p = 0 on the face); other box sides and faces of solid cells
 (cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
@@ -29,6 +30,7 @@ import taichi as ti
 from .gas_energy import make_energy_kernels
 from .gas_grid import CLOSED, INLET, OUTLET, make_cic
 from .ordered import in_order
+
 SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster, deterministic)
 # The CG keeps its scalars in G.sums (RZ = r.z, DQ = d.q, RZ_NEW = the next r.z, RR = r.r), so that the
 # host launches iterations without reading anything back (`tidem.gas`, _project).
