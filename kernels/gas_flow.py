@@ -48,7 +48,7 @@ def cg_batch() -> int:
     """Iterations of the parallel CG per launch (`cg_iterate`) and per read of its residual: one on
     the CPU, where the solve stops at the first iteration within tolerance; GPU_BATCH on a GPU, where
     each launch and each read from the host waits for the device (the bubbling bed's 130 iterations
-    per solve, a launch per stage and a read per iteration, took 2.9 ms a step on an H100,
+    per solve, a launch per stage and two reads per iteration, took 2.9 ms a step on an H100,
     `benchmarks/README.md`): the solve may go up to GPU_BATCH - 1 iterations past its tolerance."""
     return 1 if in_order() else GPU_BATCH
 
@@ -241,7 +241,7 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
 
     @ti.kernel
     def cg_iterate() -> ti.f64:
-        """cg_batch(cells) CG iterations in one launch, each loop a parallel stage; returns r.r."""
+        """cg_batch() CG iterations in one launch, each loop a parallel stage; returns r.r."""
         for _ in ti.static(range(batch)):
             cg_apply()
             cg_update()

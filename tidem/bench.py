@@ -126,7 +126,9 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
                                    f"print(json.dumps(b.run_case({n}, '{prec}', {k}, {threads}, {str(bed) if bed else None!r}, '{arch}')))"],
                                   capture_output=True, text=True, env=env)
             if proc.returncode != 0:
-                print(f"{n:>8} {prec:>9} failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr else ''}")
+                last = proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else ""
+                kind, _, message = last.partition(": ")  # the exception's class, then its message
+                print(f"{n:>8} {prec:>9} failed: {message if message and ' ' not in kind else last}")
                 continue
             row = json.loads(proc.stdout.strip().splitlines()[-1])
             rows.append(row)

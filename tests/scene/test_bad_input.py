@@ -180,6 +180,7 @@ def test_invalid_toml(tmp_path):
     (["scene", "sphere_impact", "--t-end", "-1"], "--t-end -1.0: the end time must be a finite number > 0 s"),
     (["scene", "sphere_impact", "--set", "numerics.t_end"], "expected KEY=VALUE"),
     (["bench", "--precision", "half"], "--precision half: choose float32, float64, mixed, both or all"),
+    (["bench", "--arch", "gpu"], "--arch gpu: choose cpu, cuda or vulkan"),
 ])
 def test_bad_command_line_options(args, expected):
     result = runner.invoke(app, args)
