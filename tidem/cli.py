@@ -15,7 +15,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from tidem.cli_common import Sets, app, build_or_exit, fail, load_scene, writable
+from tidem.cli_common import Sets, app, build_or_exit, fail, load_scene, start_taichi, writable
 from tidem.scene.errors import SceneError
 
 def main() -> None:
@@ -49,14 +49,7 @@ def scene(
     if t_end is not None and not 0 < t_end < float("inf"):
         fail(f"--t-end {t_end}: the end time must be a finite number > 0 s", 2)
     loaded = load_scene(path, set_)
-    from tidem.runtime import BackendUnavailable, ensure_taichi
-
-    try:
-        ensure_taichi(arch, loaded.scene.numerics.precision)
-    except BackendUnavailable as exc:
-        fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
-    except ValueError as exc:  # TIDEM_COMPILE or TIDEM_BIND
-        fail(str(exc), 2)
+    start_taichi(arch, loaded.scene.numerics.precision)
     model = build_or_exit(loaded, smoke=smoke, t_end=t_end)
     from tidem.run import run
 
@@ -372,16 +365,12 @@ def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, thre
 
     from tidem.bench import profile_scene
     from tidem.phases import format_table
-    from tidem.runtime import BackendUnavailable, ensure_taichi
     from tidem.solver import RunError
 
     if steps < 1 or warmup < 0:
         fail(f"--steps {steps} --warmup {warmup}: need at least one timed step and no negative warm-up", 2)
     loaded = load_scene(path, sets)
-    try:
-        ensure_taichi(arch, loaded.scene.numerics.precision, threads)
-    except BackendUnavailable as exc:
-        fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
+    start_taichi(arch, loaded.scene.numerics.precision, threads)
     model = build_or_exit(loaded)
     start = _checkpoint(resume, loaded, model) if resume is not None else None
     try:

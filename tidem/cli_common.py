@@ -36,6 +36,19 @@ def load_scene(path: Optional[str], sets: Optional[list[str]]):
         fail(exc.render(), 2)
 
 
+def start_taichi(arch: str, precision: str, threads: int | None = None) -> None:
+    """Start Taichi on `arch` (`tidem.runtime.ensure_taichi`), or exit 2: the backend does not start
+    here, or TIDEM_COMPILE / TIDEM_BIND hold a value it does not know."""
+    from tidem.runtime import BackendUnavailable, ensure_taichi
+
+    try:
+        ensure_taichi(arch, precision, threads)
+    except BackendUnavailable as exc:
+        fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
+    except ValueError as exc:  # TIDEM_COMPILE or TIDEM_BIND
+        fail(str(exc), 2)
+
+
 def build_or_exit(loaded, smoke=False, t_end=None):
     """The Model of a loaded scene, or exit 2 with the problems `build_model` finds."""
     from tidem.model import build_model

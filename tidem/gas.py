@@ -64,6 +64,7 @@ class GasPhase:
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
                                       self.heat and gas.conduction)
+        self.serial_solve = serial_solve(self.solid.size)  # as make_flow_kernels decided
         self.cg_batch = cg_batch()
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
@@ -149,7 +150,7 @@ class GasPhase:
         bb = f["assemble"](dt)
         u_scale = max(float(np.abs(self.inlet).max()) * self.inlet_scale, 1e-3)
         scale = max(math.sqrt(bb), u_scale / min(self.gg.h) * math.sqrt(self.solid.size))
-        if serial_solve(self.solid.size):
+        if self.serial_solve:
             it = f["cg_serial"](self.gas.max_iterations, self.tol * scale)
             self._finish(it, math.sqrt(max(float(G.sums[RR]), 0.0)) / scale)
             return
