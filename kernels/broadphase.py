@@ -22,7 +22,10 @@ Algorithm (O(N) per rebuild):
    slot, -1 for a new pair); a pair listed before in the partner's row (its owner changed: one of
    the two crossed into another slab) takes its history from there, seen from the new owner's
    side (springs change sign), through a buffer (`flip_*`, `src` = -2 - entry);
-4. carry the history within the row, in place (`move_rows`).
+4. carry the history within the row, in place (`move_rows`);
+5. note how many partners touch i (`nbr_touch`, listed first) and the smallest gap to the others
+   (`nbr_gap` [m], float32), whose history is zeroed: the contact passes skip those quiet partners
+   while no particle has moved far enough to close that gap (`kernels/contact.py`).
 Steps 3 and 4 are separate loops, so that no row changes while another particle reads it.
 
 A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
@@ -64,6 +67,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     capacity = S.x.shape[0]
     MOVED = K  # a `src` no slot has: the slot holds its new history (move_rows)
+    QUIET = 1e30  # nbr_gap of a row whose partners all touch
 
     @ti.func
     def count_cells(n):
@@ -114,6 +118,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         for i in range(n):
             if not S.active[i]:
                 S.nbr_count[i] = 0
+                S.nbr_touch[i] = 0
+                S.nbr_gap[i] = 0.0
                 continue
             xi = S.x[i]
             ri = radius_of(i)
@@ -178,10 +184,18 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                     S.nbr_new[i, b + 1] = S.nbr_new[i, b]
                     b -= 1
                 S.nbr_new[i, b + 1] = key
+            touching = 0
             for a in range(count):
                 key = S.nbr_new[i, a]
+                touching += ti.cast(key < capacity, ti.i32)
                 S.nbr_new[i, a] = ti.select(key >= capacity, key - capacity, key)
+            gap = QUIET
+            for a in range(touching, count):  # the quiet partners' smallest gap (step 5)
+                j = S.nbr_new[i, a]
+                gap = ti.min(gap, min_image(S.x[j] - xi).norm() - ri - radius_of(j))
             S.nbr_count[i] = count
+            S.nbr_touch[i] = touching
+            S.nbr_gap[i] = gap
             S.x_build[i] = xi
             if ti.static(growth):
                 S.r_build[i] = S.radius[i]
@@ -285,6 +299,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         else:
                             take_history(i, k, src)
                             k = src
+            for k in range(S.nbr_touch[i], count):  # partners apart: no history (step 5)
+                set_history(i, k, zero3, zero3, 0.0)
             for k in range(count):
                 S.nbr[i, k] = S.nbr_new[i, k]
             S.nbr_n[i] = count

@@ -28,6 +28,17 @@ of its own and the sums are atomic: the same forces, summed in an order that var
 With heat the same pair evaluation adds its conduction (contact spot and gas lens) to both
 particles' heat flows.
 
+Quiet partners. A row lists the partners that touched at the last neighbour build first
+(`nbr_touch` of them) and the others after; the build zeroed the others' history and noted the
+smallest gap between their surfaces, `nbr_gap` (`kernels/broadphase.py`). Since then no two
+particles have come closer than twice the largest displacement, 2 sqrt(S.max_disp), so while that
+(plus a rounding margin, `quiet_margin`) stays below a row's `nbr_gap`, none of those partners
+touches: the pass evaluates the first `nbr_touch` partners only. A pair apart adds nothing and its
+history stays zero, so this changes no bit; it saves the distance, the branch and the history store
+of each partner apart (a settled bed: 1.3 of 3.7 listed pairs a particle, `benchmarks/README.md`).
+With the gas lens (`fluid_layer`) pairs apart conduct, so they are skipped only in steps without
+the conduction.
+
 With numerics.precision = 'mixed' the row fields (ft, mr, dmax) are float32: what the loop reads
 from them is widened to float64 (`wide`) and what it stores is rounded once; the sums stay float64.
 
@@ -79,7 +90,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
                       surface_reach: float = 0.0, grain_scale: float = 1.0, atomic: bool | None = None,
-                      uniform: tuple[float, float] | None = None):
+                      uniform: tuple[float, float] | None = None, quiet_margin: float = 0.0):
     """Return a namespace of the kernel `forces(n, t, dt, conduct, diag)` (both passes), `passes(then)`,
     which makes the Taichi func of both passes that calls the Taichi func then(i, t, dt, drift, kick) on
     every particle whose sums are complete (`kernels/integrate.py` fuses the kick with them); `finish(i, t)` (the
@@ -110,7 +121,8 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     build runs it); a particle far from every wall and tube then costs no surface evaluation at all.
     `grain_scale` k > 1: every particle is a parcel of k^3 grains (one k per scene with heat) and
     conducts as those grains do (kernels/heat.py). `atomic`: atomic sums, one thread per particle
-    (module docstring); None: on any architecture but the CPU."""
+    (module docstring); None: on any architecture but the CPU. `quiet_margin` [m] > 0: skip quiet
+    partners (module docstring) with that rounding margin; 0: evaluate every listed pair."""
     if atomic is None:
         atomic = not in_order()
     flat = atomic or not pairs  # one loop over the particles, no slabs
@@ -118,6 +130,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     n_blocks = block_count(n_slabs)
     workers = max(1, ti.lang.impl.current_cfg().cpu_max_num_threads)
     pfp = heat and fluid_layer > 0.0
+    quiet = pairs and quiet_margin > 0.0  # skip the quiet partners (module docstring)
     min_image, _wrap, _cc, _cid = make_geometry(grid)
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
@@ -306,8 +319,9 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         S.ncontact[i] = 0
 
     @ti.func
-    def visit(i, t, dt, conduct, diag):
-        """Particle i's pairs (adding the reactions to the partners), walls and tubes, and gravity."""
+    def visit(i, t, dt, conduct, diag, reach):
+        """Particle i's pairs (adding the reactions to the partners), walls and tubes, and gravity; its
+        quiet partners only where their gap at the build is within `reach` (`quiet_reach`)."""
         xi = S.x[i]
         ri = radius_of(i)
         mi = mass_of(i)
@@ -324,6 +338,11 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             # while this pair's contact law runs, instead of after it (10-14 % of the pass on the peer bed;
             # past the row's end the "next partner" is i itself, never used)
             count = S.nbr_n[i]
+            if ti.static(quiet):  # (a select, not a branch: in a flowing bed it goes either way)
+                skip = S.nbr_gap[i] > reach
+                if ti.static(pfp):  # the gas lens conducts between partners apart, when the conduction is on
+                    skip &= conduct == 0
+                count = ti.select(skip, S.nbr_touch[i], count)
             j_next = ti.select(count > 0, S.nbr[i, 0], i)
             d_next, rj_next, rsum_next, dist2_next = separation(xi, ri, j_next, S.x)
             dist_next = ti.sqrt(dist2_next)
@@ -464,6 +483,14 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             add(S.ncontact, i, touching)
 
     @ti.func
+    def quiet_reach():
+        """How far apart two particles listed at the last neighbour build may now have come closer:
+        twice the largest displacement since then (S.max_disp holds it squared, from the last
+        kick-drift; larger after a build), plus `quiet_margin` for rounding. A partner whose gap
+        was wider cannot touch yet."""
+        return 2.0 * ti.sqrt(S.max_disp[None]) + quiet_margin
+
+    @ti.func
     def block_start(b):
         """The first slab of block b (block n_blocks: n_slabs)."""
         return b * n_slabs // n_blocks
@@ -474,9 +501,9 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             clear(S.slab_list[p])
 
     @ti.func
-    def sweep_slab(s, t, dt, conduct, diag):
+    def sweep_slab(s, t, dt, conduct, diag, reach):
         for p in range(S.slab_start[s], S.slab_start[s + 1]):
-            visit(S.slab_list[p], t, dt, conduct, diag)
+            visit(S.slab_list[p], t, dt, conduct, diag, reach)
 
     @ti.func
     def start_pass(conduct):
@@ -517,6 +544,9 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         def both(n, t, dt, conduct, diag, drift, kick):
             if ti.static(track_contact_time):
                 diag = 1  # the contact times need the count in every pass
+            reach = quiet_reach()
+            if ti.static(kicks):
+                S.max_disp[None] = 0.0  # the kick-drifts' displacements follow
             start_pass(conduct)
             if ti.static(flat):
                 if diag:
@@ -525,7 +555,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                             clear(i)
                 for i in range(n):
                     if S.active[i]:
-                        visit(i, t, dt, conduct, diag)
+                        visit(i, t, dt, conduct, diag, reach)
                 if ti.static(kicks):
                     for i in range(n):
                         if S.active[i]:
@@ -545,7 +575,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                                 for s in range(lo, hi):
                                     clear_slab(s)
                             for s in range(lo, hi - 1):
-                                sweep_slab(s, t, dt, conduct, diag)
+                                sweep_slab(s, t, dt, conduct, diag, reach)
                                 if ti.static(kicks):
                                     if s > lo or pred(s) < 0:  # complete: its predecessor is swept
                                         largest = ti.max(largest, integrate_slab(s, t, dt, drift, kick))
@@ -557,7 +587,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                             if b >= n_blocks:
                                 break
                             last = block_start(b + 1) - 1
-                            sweep_slab(last, t, dt, conduct, diag)
+                            sweep_slab(last, t, dt, conduct, diag, reach)
                             if ti.static(kicks):
                                 largest = ti.max(largest, integrate_slab(last, t, dt, drift, kick))
                                 after = succ(last)  # the next block's first slab

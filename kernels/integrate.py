@@ -159,8 +159,7 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
 
     @ti.kernel
     def forces_and_kick(n: ti.i32, t: float, dt: float, conduct: ti.i32, diag: ti.i32, drift: ti.i32, kick: ti.i32):
-        S.max_disp[None] = 0.0
-        passes_and_kick(n, t, dt, conduct, diag, drift, kick)
+        passes_and_kick(n, t, dt, conduct, diag, drift, kick)  # (which zeroes S.max_disp once it has read it)
         if kick:
             advance_surfaces(dt)
 

@@ -32,9 +32,10 @@ FORMAT = 3
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # Rewritten before use (the conduction flag by every force pass, the reactions' gas book by every reaction
 # step, `sums` by every energy sum and, in the gas, by every pressure solve, the rest by every neighbour
-# build): not kept.
+# build): not kept. The quiet partners' gaps (nbr_touch, nbr_gap) are not kept either: a restored run
+# evaluates every listed pair until its next build, which gives the same bits (kernels/contact.py).
 TRANSIENT = ("conduct", "gas_book", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
-             "cell_count", "cell_start", "cell_fill", "pcell", "sorted_idx", "sums")
+             "cell_count", "cell_start", "cell_fill", "pcell", "sorted_idx", "sums", "nbr_touch", "nbr_gap")
 
 
 class CheckpointError(RuntimeError):
@@ -148,6 +149,7 @@ def restore(solver, meta: dict, arrays: dict) -> None:
                                   f"{fld.to_numpy().shape} (made by another version of tidem, or for other "
                                   "capacities): start a new run")
         fld.from_numpy(arrays[name])
+    solver.state.nbr_gap.fill(0.0)  # no quiet partner skipped until the next neighbour build
     s = meta["solver"]
     solver.t, solver.steps, solver.rebuilds, solver.profile_t0 = s["t"], s["steps"], s["rebuilds"], s["profile_t0"]
     if solver.gas is not None:

@@ -41,6 +41,18 @@ from tidem.storage_order import SORT_MIN_PARTICLES, sort_storage
 from tidem.surfaces import is_heated
 
 
+QUIET_MARGIN = 0.01  # of the skin: the rounding margin of the quiet partners' reach (kernels/contact.py)
+
+
+def quiet_margin(model: Model) -> float:
+    """The rounding margin [m] of the quiet partners' reach (`kernels/contact.py`): a hundredth of the
+    skin, plus 16 rounding units of the largest coordinate in the kernels' float type."""
+    g = model.grid
+    largest = max(max(abs(lo), abs(lo + L)) for lo, L in zip(g.lo, g.length))
+    eps = np.finfo(np.float32 if model.features.float_bytes == 4 else np.float64).eps
+    return QUIET_MARGIN * model.skin + 16 * eps * largest
+
+
 class RunError(RuntimeError):
     """The simulation became invalid; the message names the particle or setting and the fix."""
 
@@ -98,7 +110,8 @@ class Solver:
                                    model.wall_slots, model.gravity, S, f.contact_time,
                                    model.one_material(), f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
-                                   model.skin + model.heat_reach, model.grain_scale, uniform=model.uniform_particles())
+                                   model.skin + model.heat_reach, model.grain_scale, uniform=model.uniform_particles(),
+                                   quiet_margin=quiet_margin(model))
         self._rebuild = None
         if f.contacts:  # one launch: the list, then the surfaces in reach (culling)
             after = (forces.mark_near,) if forces.mark_near is not None else ()

@@ -17,7 +17,8 @@ Per-particle fields, shape [capacity]:
 Neighbour list, shape [capacity, K], stored slot-major (`_Placer.rows`), each pair in its owner's
 row only (`kernels/broadphase.py`): nbr (partner), ft (tangential spring [m]), mr (rolling spring
 [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild, nbr_count
-[capacity] its row lengths, flip_ft, flip_mr, flip_dmax [capacity] its buffer of the history of
+[capacity] its row lengths, nbr_touch [capacity] the number of partners that touched at the build (listed
+first), nbr_gap [capacity] the smallest gap to the others then [m] (float32; <= 0: none skipped), flip_ft, flip_mr, flip_dmax [capacity] its buffer of the history of
 pairs that changed owner (flips[None] entries). With numerics.precision = 'mixed' the float rows
 (ft, mr, dmax, flip_*) are float32, every other field float64.
 Slabs (`kernels/geometry.py`, `slab_layout`): slab [capacity] (a particle's slab at the last
@@ -154,6 +155,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.per_particle((N,), name, ti.i32)
     for name in ("slab", "slab_list", "nbr_count"):  # rewritten by each neighbour build
         p.place((N,), name, ti.i32)
+    # side by side: the contact passes read both for each particle (kernels/contact.py, quiet partners)
+    p.fb.dense(ti.i, N).place(p.make("nbr_touch", ti.i32), p.make("nbr_gap", ti.f32))
     n_slabs = slab_layout(model.grid)[1]
     p.place((n_slabs + 1,), "slab_start", ti.i32)
     p.place((n_slabs,), "slab_fill", ti.i32)
