@@ -1,5 +1,6 @@
 """The contact passes (in a scene with heat also without the conduction, as between two
-evaluations of it) and the neighbour build, each called again and again on one fixed state (a
+evaluations of it), the passes with the kick and the next step's kick-drift in one launch (as a
+run's step takes them, where the scene has no reactions) and the neighbour build, each called again and again on one fixed state (a
 scene's checkpoint): the cleanest figure for a change to one of these kernels, since neither the
 state nor the work changes between calls.
 
@@ -10,7 +11,7 @@ RUN_DIR holds a checkpoint.npz of SCENE (e.g. `tidem scene fluidized_tube --t-en
 --no-render`); `peer:N` is instead the N-particle peer benchmark bed of `tidem bench` (float64, after
 its 300 warm-up steps). Takes 20 steps, then times CALLS (default 100) calls of each kernel after one
 untimed call and prints the minimum, 20th percentile and median in ms. The passes take a time step of
-zero: the same work as a step, but the springs do not grow from call to call (with the step's dt, some
+zero: the same work as a step, but the springs do not grow and the particles do not move from call to call (with the step's dt, some
 hundreds of calls on one state stretch them until the contacts slide, which costs more square roots
 and divisions than a step does). For a tree other than the installed
 one, run it with `env PYTHONPATH=TREE python -P benchmarks/kernel_repeat.py ...` from a folder
@@ -52,6 +53,8 @@ def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
     n, t, dt = solver.n, solver.t, 0.0  # module docstring: the history stays as it is
     # as most steps run it: no contact counts and overlaps for the host (kernels/contact.py)
     kernels = {"contact passes": lambda: solver._forces(n, t, dt, 1, 0)}
+    if solver._forces_and_kick is not None:  # as a run's step takes them: with the kick and the next kick-drift
+        kernels["passes, kick and kick-drift"] = lambda: solver._forces_and_kick(n, t, dt, 1, 0, 1, 1)
     if model.features.heat:  # a step between two evaluations of the conduction (heat.conduction_interval)
         kernels["contact passes without conduction"] = lambda: solver._forces(n, t, dt, 0, 0)
     if solver._rebuild is not None:

@@ -41,11 +41,11 @@ from tidem.storage_order import SORT_MIN_PARTICLES, sort_storage
 from tidem.surfaces import is_heated
 
 
-QUIET_MARGIN = 0.01  # of the skin: the rounding margin of the quiet partners' reach (kernels/contact.py)
+QUIET_MARGIN = 1e-4  # of the skin: the rounding margin of the quiet partners' reach (kernels/contact.py)
 
 
 def quiet_margin(model: Model) -> float:
-    """The rounding margin [m] of the quiet partners' reach (`kernels/contact.py`): a hundredth of the
+    """The rounding margin [m] of the quiet partners' reach (`kernels/contact.py`): 1e-4 of the
     skin, plus 16 rounding units of the largest coordinate in the kernels' float type."""
     g = model.grid
     largest = max(max(abs(lo), abs(lo + L)) for lo, L in zip(g.lo, g.length))
