@@ -1,8 +1,8 @@
 """The contact passes (in a scene with heat also without the conduction, as between two
 evaluations of it), the passes with the kick and the next step's kick-drift in one launch (as a
-run's step takes them, where the scene has no reactions) and the neighbour build, each called again and again on one fixed state (a
-scene's checkpoint): the cleanest figure for a change to one of these kernels, since neither the
-state nor the work changes between calls.
+run's step takes them, where the scene has no reactions) and the neighbour build, each called
+again and again on one fixed state (a scene's checkpoint): the cleanest figure for a change to one
+of these kernels, since neither the state nor the work changes between calls.
 
     python benchmarks/kernel_repeat.py SCENE RUN_DIR [CALLS [THREADS]]
     python benchmarks/kernel_repeat.py peer:N - [CALLS [THREADS]]
@@ -11,10 +11,10 @@ RUN_DIR holds a checkpoint.npz of SCENE (e.g. `tidem scene fluidized_tube --t-en
 --no-render`); `peer:N` is instead the N-particle peer benchmark bed of `tidem bench` (float64, after
 its 300 warm-up steps). Takes 20 steps, then times CALLS (default 100) calls of each kernel after one
 untimed call and prints the minimum, 20th percentile and median in ms. The passes take a time step of
-zero: the same work as a step, but the springs do not grow and the particles do not move from call to call (with the step's dt, some
-hundreds of calls on one state stretch them until the contacts slide, which costs more square roots
-and divisions than a step does). For a tree other than the installed
-one, run it with `env PYTHONPATH=TREE python -P benchmarks/kernel_repeat.py ...` from a folder
+zero: the same work as a step, but the springs do not grow and the particles do not move from call
+to call (with the step's dt, some hundreds of calls on one state stretch them until the contacts
+slide, which costs more square roots and divisions than a step does). For a tree other than the
+installed one, run it with `env PYTHONPATH=TREE python -P benchmarks/kernel_repeat.py ...` from a folder
 without a tidem tree.
 """
 

@@ -118,8 +118,6 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         for i in range(n):
             if not S.active[i]:
                 S.nbr_count[i] = 0
-                S.nbr_touch[i] = 0
-                S.nbr_gap[i] = 0.0
                 continue
             xi = S.x[i]
             ri = radius_of(i)

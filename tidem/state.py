@@ -17,10 +17,11 @@ Per-particle fields, shape [capacity]:
 Neighbour list, shape [capacity, K], stored slot-major (`_Placer.rows`), each pair in its owner's
 row only (`kernels/broadphase.py`): nbr (partner), ft (tangential spring [m]), mr (rolling spring
 [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild, nbr_count
-[capacity] its row lengths, nbr_touch [capacity] the number of partners that touched at the build (listed
-first), nbr_gap [capacity] the smallest gap to the others then [m] (float32; <= 0: none skipped), flip_ft, flip_mr, flip_dmax [capacity] its buffer of the history of
-pairs that changed owner (flips[None] entries). With numerics.precision = 'mixed' the float rows
-(ft, mr, dmax, flip_*) are float32, every other field float64.
+[capacity] its row lengths, nbr_touch [capacity] the number of partners that touched at the build
+(listed first), nbr_gap [capacity] the smallest gap to the others then [m] (float32; <= 0: none
+skipped), flip_ft, flip_mr, flip_dmax [capacity] its buffer of the history of pairs that changed owner
+(flips[None] entries). With numerics.precision = 'mixed' the float rows (ft, mr, dmax, flip_*) are
+float32, every other field float64.
 Slabs (`kernels/geometry.py`, `slab_layout`): slab [capacity] (a particle's slab at the last
 build), slab_list (the particles of slab s, in index order, at slab_start[s] ..
 slab_start[s + 1] - 1), slab_fill (scratch of the build), slab_next (the contact passes' three slab counters).
