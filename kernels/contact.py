@@ -1,10 +1,9 @@
-"""Contact forces and torques: particle-particle (from the Verlet list), plane walls and tubes.
+"""Contact forces and torques, swept over the particles: each particle's pairs from the Verlet list
+(`kernels/pair_contact.py`), its contacts with plane walls and tubes (`kernels/surface_contact.py`)
+and with mesh walls (`kernels/mesh_contact.py`), and gravity.
 
-Each pair is listed once, in the row of its owner (`kernels/broadphase.py`), and evaluated there:
-the contact law (`contact_laws.make_contact_response`) updates the pair's history in the owner's
-row and gives the force F and rolling moment M on the owner i; the partner j receives -F and the
-torque r_j n x F - M (n the unit normal from i to j: Newton's third law, the contact point r_j n
-from j). Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
+Each pair is listed once, in the row of its owner (`kernels/broadphase.py`), and evaluated there,
+the partner receiving the reaction. Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
 owner's slab or in the next one. The slabs are grouped into blocks of consecutive slabs
 (`block_count`: an even number of blocks, at most 16, each of two slabs or more; one block below
 four slabs), so (`passes`)
@@ -28,25 +27,8 @@ of its own and the sums are atomic: the same forces, summed in an order that var
 With heat the same pair evaluation adds its conduction (contact spot and gas lens) to both
 particles' heat flows.
 
-Quiet partners. A row lists the partners that touched at the last neighbour build first
-(`nbr_touch` of them) and the others after; the build zeroed the others' history and noted the
-smallest gap between their surfaces, `nbr_gap` (`kernels/broadphase.py`). Since then no two
-particles have come closer than twice the largest displacement, 2 sqrt(S.max_disp), so while that
-(plus a rounding margin, `quiet_margin`) stays below a row's `nbr_gap`, none of those partners
-touches: the pass evaluates the first `nbr_touch` partners only. A pair apart adds nothing and its
-history stays zero, so this changes no bit; it saves the distance, the branch and the history store
-of each partner apart (a settled bed: 1.3 of 3.7 listed pairs a particle, `benchmarks/README.md`).
-With the gas lens (`fluid_layer`) pairs apart conduct, so they are skipped only in steps without
-the conduction.
-
-With numerics.precision = 'mixed' the row fields (ft, mr, dmax) are float32: what the loop reads
-from them is widened to float64 (`wide`) and what it stores is rounded once; the sums stay float64.
-
-Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is
-a plane with a velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Wall and tube contacts
-keep their history in a few slots per particle keyed by the surface index (`wmask` has bit s
-set while surface s holds a slot, so particles away from every wall skip the search); a particle that
-touches more surfaces than it has slots is counted in `overflow[1]` (an error for the run).
+Quiet partners (`kernels/pair_contact.py`): while no pair listed apart at the last build can have
+closed, the pass evaluates only the partners that touched then; this changes no bit.
 
 Gravity is added here: f_i = m_i g + sum of contact forces. `ovl[i]` receives the largest
 overlap of particle i relative to the smaller radius of the pair, `ncontact[i]` its number of
@@ -61,9 +43,11 @@ import taichi as ti
 
 from .contact_laws import make_contact_response
 from .geometry import make_geometry, make_slabs
-from .heat import pfp_conductance, spot_conductance, wall_conductance, wall_radiation
-from .ordered import in_order, raise_max
+from .mesh_contact import make_mesh_contacts
+from .ordered import in_order, make_sums, raise_max
+from .pair_contact import make_pair_contacts
 from .sizes import make_sizes
+from .surface_contact import make_surface_contacts
 
 # Loop iterations per worker in the slab loops. Taichi's CPU runtime (1.7) runs a parallel loop of fewer
 # than about a thousand iterations on one thread and splits a longer one into one block of consecutive
@@ -90,7 +74,8 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                       angle_bins: int = 0, fluid_layer: float = 0.0, pairs: bool = True,
                       radiation: bool = False, foil: bool = False, wall_foil: bool = False, cull: int = 0,
                       surface_reach: float = 0.0, grain_scale: float = 1.0, atomic: bool | None = None,
-                      uniform: tuple[float, float] | None = None, quiet_margin: float = 0.0):
+                      uniform: tuple[float, float] | None = None, quiet_margin: float = 0.0,
+                      meshes: tuple[int, int, int, float] | None = None):
     """Return a namespace of the kernel `forces(n, t, dt, conduct, diag)` (both passes), `passes(then)`,
     which makes the Taichi func of both passes that calls the Taichi func then(i, t, dt, drift, kick) on
     every particle whose sums are complete (`kernels/integrate.py` fuses the kick with them); `finish(i, t)` (the
@@ -122,93 +107,35 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     `grain_scale` k > 1: every particle is a parcel of k^3 grains (one k per scene with heat) and
     conducts as those grains do (kernels/heat.py). `atomic`: atomic sums, one thread per particle
     (module docstring); None: on any architecture but the CPU. `quiet_margin` [m] > 0: skip quiet
-    partners (module docstring) with that rounding margin; 0: evaluate every listed pair."""
+    partners (module docstring) with that rounding margin; 0: evaluate every listed pair. `meshes`: (mesh
+    count, candidates per particle, contact slots per particle, on-triangle tolerance [m]) adds the
+    mesh walls (`kernels/mesh_contact.py`); the namespace's `list_meshes(n)` is then their broad phase,
+    which the neighbour build runs."""
     if atomic is None:
         atomic = not in_order()
     flat = atomic or not pairs  # one loop over the particles, no slabs
     n_slabs, _slab_of, succ, pred = make_slabs(grid)
     n_blocks = block_count(n_slabs)
     workers = max(1, ti.lang.impl.current_cfg().cpu_max_num_threads)
-    pfp = heat and fluid_layer > 0.0
-    quiet = pairs and quiet_margin > 0.0  # skip the quiet partners (module docstring)
-    min_image, _wrap, _cc, _cid = make_geometry(grid)
+    min_image, _wrap, cell_coord, cell_id = make_geometry(grid)
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
     g = ti.Vector(list(gravity))
-    n_planes = len(planes)
-    moving = [any(p["vel"]) for p in planes]
-    n_surf = n_planes + len(tubes)
     zero3 = ti.Vector([0.0, 0.0, 0.0])
-    cg = float(grain_scale)
-    fp = ti.lang.impl.current_cfg().default_fp
-    K = S.nbr.shape[1]
-    hist = S.ft.dtype  # float32 with numerics.precision = 'mixed' (tidem.state), else fp
-
-    single = one_material is not None
-    p_one, s_one = one_material if single else (None, None)
+    p_one, s_one = one_material if one_material is not None else (None, None)
     radius_of, mass_of = make_sizes(S, uniform)
-
-    @ti.func
-    def wide(v):
-        """A value read from the rows, in the kernels' float type."""
-        return ti.cast(v, fp)
-
-    @ti.func
-    def lens(p, r_eff, gap, delta_f):
-        """The gas-lens conductance; a parcel's is that of its grains' k lenses (k H(R*/k, h/k, delta_f/k)),
-        i.e. H(R*, h/k, delta_f/k) since H is proportional to R*."""
-        return pfp_conductance(p, r_eff, gap / cg, delta_f / cg)
-
-    @ti.func
-    def separation(xi, ri, j, x: ti.template()):
-        """Minimum-image separation x_j - x_i (positions `x`), r_j, r_i + r_j and the squared distance."""
-        d = min_image(x[j] - xi)
-        rj = radius_of(j)
-        return d, rj, ri + rj, d.norm_sqr()
-
-    @ti.func
-    def unit_normal(d, dist, rsum):
-        """Unit normal along d and |d| = dist (z for coincident centres). One division and three products:
-        Taichi's fast math does not let the compiler turn d / |d| into that itself."""
-        nrm = ti.Vector([0.0, 0.0, 1.0])
-        if dist > 1e-12 * rsum:
-            nrm = d * (1.0 / dist)
-        return nrm, dist
-
-    @ti.func
-    def pair_params(mat_i, j):
-        """The material-pair parameter vector of i and j (constants where all particles are of one material)."""
-        if ti.static(single):
-            return ti.Vector(p_one)
-        else:
-            return S.pp[mat_i, S.mat[j]]
-
-    @ti.func
-    def surface_params(mat_i, s: ti.template()):
-        """The material-surface parameter vector of i and surface s, as `pair_params`."""
-        if ti.static(single):
-            return ti.Vector(s_one[s])
-        else:
-            return S.ps[mat_i, s]
-
-    @ti.func
-    def touching_heat(i, j, mat_i, r_eff, delta, ri, rj):
-        """Heat flow into i from a touching partner j: contact spot, plus the gas lens."""
-        p_pair = pair_params(mat_i, j)
-        h_pair = spot_conductance(p_pair, r_eff, delta)
-        if ti.static(pfp):
-            h_pair += lens(p_pair, r_eff, -delta, fluid_layer * ti.min(ri, rj))
-        return h_pair * (S.T[j] - S.T[i])
-
-    @ti.func
-    def lens_heat(i, j, mat_i, ri, rj, rsum, dist):
-        """Heat flow into i through the gas lens from a partner j at distance `dist` that does not touch it."""
-        flow = 0.0
-        gap = dist - rsum
-        if gap < fluid_layer * ti.min(ri, rj):
-            h_gas = lens(pair_params(mat_i, j), ri * rj / rsum, gap, fluid_layer * ti.min(ri, rj))
-            flow = h_gas * (S.T[j] - S.T[i])
-        return flow
+    add, raise_to = make_sums(atomic)
+    pair = make_pair_contacts(S, respond, hysteretic, rolling, p_one, heat, fluid_layer, pairs and quiet_margin > 0.0,
+                              grain_scale, min_image, radius_of, mass_of, add, raise_to) if pairs else None
+    surf = make_surface_contacts(S, planes, tubes, W, respond, hysteretic, rolling, s_one, heat, fluid_layer, angle_bins,
+                                 radiation, foil, wall_foil, cull, surface_reach, grain_scale, min_image, radius_of)
+    n_surf = surf.n_surf
+    n_meshes = meshes[0] if meshes else 0
+    mesh = None
+    if n_meshes:
+        _n, per_particle, slots, on_tol = meshes
+        mesh = make_mesh_contacts(S, law, rolling, n_surf, per_particle, slots, surface_reach, on_tol, heat, fluid_layer,
+                                  radiation, grain_scale, (cell_coord, cell_id), radius_of)
 
     @ti.func
     def note_contact_time(i, touching, t):
@@ -220,98 +147,6 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                 S.touch_end[i] = t
 
     @ti.func
-    def along(v, w: ti.template()):
-        """v . w for a constant w, with the products by its zero components left out (the compiler may
-        not drop them itself: 0 x NaN is NaN)."""
-        out = 0.0
-        for a in ti.static(range(3)):
-            if ti.static(w[a] != 0.0):
-                out += v[a] * w[a]
-        return out
-
-    @ti.func
-    def surface_contact(i, s: ti.template(), t):
-        """Overlap, unit normal (particle -> surface) and surface velocity for surface s. The surfaces'
-        geometry is constant (`planes`, `tubes`), compiled into the kernel: an axis-aligned wall costs
-        one subtraction, a tube no product along its axis."""
-        xi = S.x[i]
-        r = radius_of(i)
-        delta = -1.0
-        n = ti.Vector([0.0, 0.0, 1.0])
-        u = zero3
-        if ti.static(s < n_planes):
-            t0, t1 = planes[s]["t"]
-            p = ti.Vector(planes[s]["p0"])
-            if ti.static(moving[s]):
-                tc = ti.min(ti.max(t, t0), t1)
-                p += ti.Vector(planes[s]["vel"]) * (tc - t0)
-                if t > t0 and t < t1:
-                    u = ti.Vector(planes[s]["vel"])
-            dist = along(xi - p, planes[s]["n"])
-            if dist > -r:
-                delta = r - dist
-                n = -ti.Vector(planes[s]["n"])
-        else:
-            d = min_image(xi - ti.Vector(tubes[s - n_planes]["c"]))
-            for a in ti.static(range(3)):
-                if ti.static(tubes[s - n_planes]["mask"][a] == 0.0):
-                    d[a] = 0.0
-            dist = d.norm()
-            if dist > 0.0:
-                delta = r + tubes[s - n_planes]["r"] - dist
-                n = -d / dist
-        return delta, n, u
-
-    @ti.func
-    def tube_bin(s: ti.template(), nrm):
-        """Angle bin of the contact point on tube s (0 for planes and without angle bins)."""
-        b = 0
-        if ti.static(angle_bins > 0 and s >= n_planes):
-            off = -nrm
-            omega = ti.atan2(off.dot(S.tube_side[s - n_planes]), off[2])
-            if omega < 0.0:
-                omega += 2.0 * 3.141592653589793
-            b = ti.min(ti.cast(omega / (2.0 * 3.141592653589793) * angle_bins, ti.i32), angle_bins - 1)
-        return b
-
-    @ti.func
-    def wall_temperature(s: ti.template(), b):
-        """The surface's fixed temperature, or a heated foil's temperature in angle bin b."""
-        t_wall = S.surf_T[s]
-        if ti.static(foil and s >= n_planes):
-            if S.tube_foil[s - n_planes][0] > 0.0:
-                t_wall = S.tube_bin_T[s - n_planes, b]
-        if ti.static(wall_foil and s < n_planes):
-            if S.plane_foil[s][0] > 0.0:
-                t_wall = S.plane_foil_T[s]
-        return t_wall
-
-    @ti.func
-    def surface_heat(s: ti.template(), b, flow):
-        """Book a particle's heat flow from surface s, and from a tube by angle bin b of the contact point."""
-        ti.atomic_add(S.surf_rate[s], flow)
-        if ti.static(angle_bins > 0 and s >= n_planes):
-            ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
-
-    @ti.func
-    def add(field: ti.template(), j, value):
-        """field[j] += value: a plain load and store where one thread owns j in this pass (slabs; Taichi
-        would make `field[j] += value` with an index it cannot prove private an atomic, a
-        compare-and-swap loop per float, 20 ns a pair on the peer bed), else atomic."""
-        if ti.static(atomic):
-            ti.atomic_add(field[j], value)
-        else:
-            field[j] = field[j] + value
-
-    @ti.func
-    def raise_to(field: ti.template(), j, value):
-        """field[j] = max(field[j], value), as `add`."""
-        if ti.static(atomic):
-            ti.atomic_max(field[j], value)
-        else:
-            field[j] = ti.max(field[j], value)
-
-    @ti.func
     def clear(i):
         """Zero particle i's contact count and largest overlap before a force evaluation that fills
         them (the kick-drift zeroes the force, torque and heat flow)."""
@@ -320,8 +155,8 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
 
     @ti.func
     def visit(i, t, dt, conduct, diag, reach):
-        """Particle i's pairs (adding the reactions to the partners), walls and tubes, and gravity; its
-        quiet partners only where their gap at the build is within `reach` (`quiet_reach`)."""
+        """Particle i's pairs (adding the reactions to the partners), walls, tubes and meshes, and
+        gravity; its quiet partners only where their gap at the build is within `reach` (`quiet_reach`)."""
         xi = S.x[i]
         ri = radius_of(i)
         mi = mass_of(i)
@@ -334,146 +169,13 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         touching = 0
         heat_in = 0.0
         if ti.static(pairs):  # contact.model = 'none' compiles no pair loop
-            # software pipelining: the next listed partner's distance (its loads and square root) is taken
-            # while this pair's contact law runs, instead of after it (10-14 % of the pass on the peer bed;
-            # past the row's end the "next partner" is i itself, never used)
-            count = S.nbr_n[i]
-            if ti.static(quiet):  # (a select, not a branch: in a flowing bed it goes either way)
-                skip = S.nbr_gap[i] > reach
-                if ti.static(pfp):  # the gas lens conducts between partners apart, when the conduction is on
-                    skip &= conduct == 0
-                count = ti.select(skip, S.nbr_touch[i], count)
-            j_next = ti.select(count > 0, S.nbr[i, 0], i)
-            d_next, rj_next, rsum_next, dist2_next = separation(xi, ri, j_next, S.x)
-            dist_next = ti.sqrt(dist2_next)
-            for k in range(count):
-                j, d, rj, rsum, dist2, dist_k = j_next, d_next, rj_next, rsum_next, dist2_next, dist_next
-                j_next = ti.select(k + 1 < count, S.nbr[i, ti.min(k + 1, K - 1)], i)
-                d_next, rj_next, rsum_next, dist2_next = separation(xi, ri, j_next, S.x)
-                dist_next = ti.sqrt(dist2_next)
-                if dist2 < rsum * rsum:
-                    nrm, dist = unit_normal(d, dist_k, rsum)
-                    delta = rsum - dist
-                    wj = S.w[j]
-                    v_rel = vi - S.v[j] + (ri * wi + rj * wj).cross(nrm)
-                    mj = mass_of(j)
-                    share = 1.0 / ((mi + mj) * rsum)  # one division for m* = mi mj / (mi + mj) and R*
-                    m_eff = mi * mj * rsum * share
-                    r_eff = ri * rj * (mi + mj) * share
-                    i_roll = 0.0
-                    if ti.static(rolling):
-                        ai = 1.4 * mi * ri * ri
-                        aj = 1.4 * mj * rj * rj
-                        i_roll = ai * aj / (ai + aj)
-                    dmax = 0.0
-                    if ti.static(hysteretic):
-                        dmax = wide(S.dmax[i, k])
-                    mr = zero3
-                    if ti.static(rolling):
-                        mr = wide(S.mr[i, k])
-                    f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                        nrm, delta, v_rel, wi - wj, m_eff, r_eff, 2.0 * ri, 2.0 * rj, i_roll,
-                        pair_params(mat_i, j), wide(S.ft[i, k]), mr, dmax, dt)
-                    force += f
-                    torque += (ri * nrm).cross(f_t) + m_roll
-                    add(S.f, j, -f)
-                    add(S.tq, j, (rj * nrm).cross(f_t) - m_roll)
-                    S.ft[i, k] = ti.cast(xi_new, hist)
-                    if ti.static(rolling):
-                        S.mr[i, k] = ti.cast(mr_new, hist)
-                    if ti.static(hysteretic):
-                        S.dmax[i, k] = ti.cast(dmax_new, hist)
-                    if ti.static(heat):
-                        if conduct:
-                            flow = touching_heat(i, j, mat_i, r_eff, delta, ri, rj)
-                            heat_in += flow
-                            add(S.q, j, -conduct * flow)
-                    if diag:
-                        share_ovl = delta / ti.min(ri, rj)
-                        worst = ti.max(worst, share_ovl)
-                        touching += 1
-                        raise_to(S.ovl, j, share_ovl)
-                        add(S.ncontact, j, 1)
-                else:
-                    if ti.static(pfp):
-                        if conduct:
-                            flow = lens_heat(i, j, mat_i, ri, rj, rsum, dist_k)
-                            heat_in += flow
-                            add(S.q, j, -conduct * flow)
-                    S.ft[i, k] = zero3
-                    if ti.static(rolling):
-                        S.mr[i, k] = zero3
-                    if ti.static(hysteretic):
-                        S.dmax[i, k] = 0.0
-        held = S.wmask[i]  # bit s set: surface s has a history slot
-        nearby = S.near[i] if ti.static(cull) else 0
-        for s in ti.static(range(n_surf)):
-            near = 1
-            if ti.static(cull >> s & 1):
-                near = (nearby >> s) & 1  # surfaces out of reach at the last neighbour build
-            if near:
-                delta, nrm, u = surface_contact(i, s, t)
-                slot = -1
-                if (held >> s) & 1:
-                    for q in range(W):
-                        if S.wid[i, q] == s:
-                            slot = q
-                if delta > 0.0:
-                    if slot < 0:
-                        for q in range(W):
-                            if slot < 0 and S.wid[i, q] < 0:
-                                slot = q
-                                S.wid[i, q] = s
-                                held |= 1 << s
-                                S.wft[i, q] = zero3
-                                if ti.static(rolling):
-                                    S.wmr[i, q] = zero3
-                                if ti.static(hysteretic):
-                                    S.wdmax[i, q] = 0.0
-                    if slot < 0:
-                        ti.atomic_add(S.overflow[1], 1)
-                    else:
-                        v_rel = vi - u + (ri * wi).cross(nrm)
-                        dmax = 0.0
-                        if ti.static(hysteretic):
-                            dmax = S.wdmax[i, slot]
-                        mr = zero3
-                        if ti.static(rolling):
-                            mr = S.wmr[i, slot]
-                        f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                            nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
-                            surface_params(mat_i, s), S.wft[i, slot], mr, dmax, dt)
-                        force += f
-                        torque += (ri * nrm).cross(f_t) + m_roll
-                        S.wft[i, slot] = xi_new
-                        if ti.static(heat):
-                            if conduct and S.surf_T[s] > 0.0:
-                                b = tube_bin(s, nrm)
-                                t_wall = wall_temperature(s, b)
-                                flow = wall_conductance(surface_params(mat_i, s), ri, delta, cg) * (t_wall - S.T[i])
-                                if ti.static(radiation):
-                                    flow += wall_radiation(surface_params(mat_i, s), ri, t_wall, S.T[i])
-                                heat_in += flow
-                                surface_heat(s, b, flow)
-                        if ti.static(rolling):
-                            S.wmr[i, slot] = mr_new
-                        if ti.static(hysteretic):
-                            S.wdmax[i, slot] = dmax_new
-                        if diag:
-                            worst = ti.max(worst, delta / ri)
-                            touching += 1
-                else:
-                    if slot >= 0:
-                        S.wid[i, slot] = -1
-                        held &= ~(1 << s)
-                    if ti.static(pfp):
-                        if conduct and -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
-                            b = tube_bin(s, nrm)
-                            flow = cg * lens(surface_params(mat_i, s), ri, -delta, fluid_layer * ri) * (
-                                wall_temperature(s, b) - S.T[i])
-                            heat_in += flow
-                            surface_heat(s, b, flow)
-        S.wmask[i] = held
+            force, torque, heat_in, worst, touching = pair.visit(i, xi, vi, wi, ri, mi, mat_i, dt, conduct, diag, reach,
+                                                                 force, torque, heat_in, worst, touching)
+        force, torque, heat_in, worst, touching = surf.visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag,
+                                                             force, torque, heat_in, worst, touching)
+        if ti.static(n_meshes):
+            force, torque, heat_in, worst, touching = mesh.visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag,
+                                                                 force, torque, heat_in, worst, touching)
         add(S.f, i, force)
         add(S.tq, i, torque)
         if ti.static(heat):
@@ -513,7 +215,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             S.conduct[None] = conduct
             if conduct:
                 ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
-                for s in range(n_surf):
+                for s in range(n_surf + n_meshes):
                     S.surf_rate[s] = 0.0
                 if ti.static(angle_bins > 0):
                     ti.loop_config(serialize=True)
@@ -605,23 +307,10 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         forces_only(n, t, dt, conduct, diag, 0, 0)
 
     @ti.func
-    def mark_near_surfaces(n):
-        """near[i] bit s: static surface s is within reach of particle i (run after each neighbour
-        build, in its kernel; until the next one no particle moves more than half the skin)."""
-        for i in range(n):
-            if S.active[i]:
-                bits = 0
-                for s in ti.static(range(n_surf)):
-                    if ti.static(cull >> s & 1):
-                        delta, _n, _u = surface_contact(i, s, 0.0)
-                        if -delta < surface_reach:
-                            bits |= 1 << s
-                S.near[i] = bits
-
-    @ti.func
     def finish(i, t):
         """The contact times of particle i, from its complete contact count."""
         note_contact_time(i, S.ncontact[i], t)
 
     return SimpleNamespace(forces=forces, passes=passes,
-                           finish=finish if track_contact_time else None, mark_near=mark_near_surfaces if cull else None)
+                           finish=finish if track_contact_time else None, mark_near=surf.mark_near,
+                           list_meshes=mesh.list_candidates if mesh is not None else None)

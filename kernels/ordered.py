@@ -23,3 +23,26 @@ def raise_max(target: ti.template(), value):
     it write. The value only grows during a launch, so a thread that reads a larger one may skip."""
     if value > target[None]:
         ti.atomic_max(target[None], value)
+
+
+def make_sums(atomic: bool):
+    """Return Taichi funcs (add(field, j, value), raise_to(field, j, value)): field[j] += value and
+    field[j] = max(field[j], value), as a plain load and store where one thread owns j in the pass (the
+    slabs of `kernels/contact.py`; Taichi would make `field[j] += value` with an index it cannot prove
+    private an atomic, a compare-and-swap loop per float, 20 ns a pair on the peer bed), else atomic."""
+
+    @ti.func
+    def add(field: ti.template(), j, value):
+        if ti.static(atomic):
+            ti.atomic_add(field[j], value)
+        else:
+            field[j] = field[j] + value
+
+    @ti.func
+    def raise_to(field: ti.template(), j, value):
+        if ti.static(atomic):
+            ti.atomic_max(field[j], value)
+        else:
+            field[j] = ti.max(field[j], value)
+
+    return add, raise_to

@@ -107,7 +107,8 @@ def test_check_prints_derived_numbers():
 @pytest.mark.parametrize("name", ["sphere_impact.toml", "moving_bed_tubes.toml", "moving_bed_ta1.toml",
                                   "moving_bed_ta2.toml", "fluidized_tube.toml", "char_combustion.toml",
                                   "olefin_polymerization.toml", "plasma_sublimation.toml", "packed_bed_preheat.toml",
-                                  "moving_bed_foil.toml", "lab_fluidized_bundle.toml"])
+                                  "moving_bed_foil.toml", "lab_fluidized_bundle.toml", "hopper_discharge.toml",
+                                  "rotary_kiln.toml"])
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name
@@ -126,6 +127,9 @@ def test_shipped_scene_smoke(tmp_path, name):
         assert run["particles"] == 25926 and run["grains_at_start"] == 700002 and run["coarse_grain"] == [3.0]
         _, arrays = read_vtp(sorted((out / "snapshots").glob("*.vtp"))[-1])
         assert (arrays["grains"] == 27.0).all() and len(arrays["grains"]) == 25926
+    if name == "rotary_kiln.toml":  # the turning drum's mesh, written at every snapshot, and its heat
+        assert len(list((out / "meshes").glob("mesh0_*.vtp"))) == len(list((out / "snapshots").glob("*.vtp")))
+        assert read_series(out / "timeseries.csv")["meshes0_heat_W"][-1] > 0.0
     if name == "moving_bed_foil.toml":  # the heated foil warms from the bed's temperature
         foil = read_series(out / "timeseries.csv")["tubes1_foil_T_K"]
         assert foil[0] == pytest.approx(293.15) and foil[-1] > foil[0] + 0.01

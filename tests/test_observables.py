@@ -95,3 +95,19 @@ def test_every_observable_is_documented():
 
 def test_every_listed_name_has_a_compute_function():
     assert list(obs.OBSERVABLES) == list(NEEDS)
+
+
+def test_discharge_rate_is_the_slope_of_the_steady_window():
+    """A bin that starts at 0.1 s and drains at 2 kg/s until 1 s: the rate is 2 in both halves of the
+    window; a rate that grows with time (m = t^2) shows in the halves."""
+    t = np.linspace(0.0, 1.2, 121)
+    steady = np.clip(2.0 * (t - 0.1), 0.0, 1.8)
+    rec = obs.RunRecord(time_s=1.2, x=np.zeros((0, 3)), v=np.zeros((0, 3)), mass=np.zeros(0), radius=np.zeros(0),
+                        v0=np.zeros((0, 3)), floor_z=0.0, series={"time_s": t, "discharged_mass_kg": steady})
+    got = obs.discharge_rate(rec)
+    assert got["discharge_rate_kg_s"] == pytest.approx(2.0, rel=1e-9)
+    assert got["discharge_rate_early_kg_s"] == pytest.approx(2.0, rel=1e-9)
+    assert got["discharge_rate_late_kg_s"] == pytest.approx(2.0, rel=1e-9)
+    rec.series["discharged_mass_kg"] = t**2
+    got = obs.discharge_rate(rec)
+    assert got["discharge_rate_late_kg_s"] > 1.2 * got["discharge_rate_early_kg_s"]

@@ -60,7 +60,8 @@ def _fields(solver) -> dict[str, Field]:
 
 
 def _python_state(solver) -> dict:
-    meta = {"t": solver.t, "steps": solver.steps, "rebuilds": solver.rebuilds, "profile_t0": solver.profile_t0}
+    meta = {"t": solver.t, "steps": solver.steps, "rebuilds": solver.rebuilds, "profile_t0": solver.profile_t0,
+            "mesh_t_build": solver.mesh_t_build}
     if solver.gas is not None:
         g = solver.gas
         meta["gas"] = {k: getattr(g, k) for k in ("steps", "iterations", "residual", "divergence", "inlet_scale")}
@@ -152,6 +153,7 @@ def restore(solver, meta: dict, arrays: dict) -> None:
     solver.state.nbr_gap.fill(0.0)  # no quiet partner skipped until the next neighbour build
     s = meta["solver"]
     solver.t, solver.steps, solver.rebuilds, solver.profile_t0 = s["t"], s["steps"], s["rebuilds"], s["profile_t0"]
+    solver.mesh_t_build = s.get("mesh_t_build", 0.0)  # when the moving meshes were last binned
     if solver.gas is not None:
         for k, v in s["gas"].items():
             setattr(solver.gas, k, v)

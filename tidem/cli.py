@@ -264,6 +264,7 @@ def check(
     import numpy as np
 
     from tidem.memory import format_bytes
+    from tidem.mesh_walls import report_lines
     from tidem.output_size import output_bytes
     from tidem.scene.schema import MAX_CONDUCTION_INTERVAL
 
@@ -287,6 +288,7 @@ def check(
         *([f"conduction: every {loaded.scene.heat.conduction_interval} step(s); explicit limit {model.thermal_limit:.4g} s "
            f"(heat.conduction_interval up to {min(int(model.thermal_limit / model.dt), MAX_CONDUCTION_INTERVAL)})"] if model.thermal_limit else []),
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
+        *report_lines(model.meshes, model.mesh_table, 2 * float(model.radius.min())),
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
         f"kernels: {', '.join(f.kernels())}",
         f"memory (fields): {format_bytes(model.memory_bytes())}, {model.memory_bytes() / model.capacity:.0f} B/particle; "

@@ -34,6 +34,9 @@ class Features:
     growth: bool = False  # particles that grow (polymerization with growth)
     averaging: bool = False  # time-averaged fields in cells and ring sectors ([averaging])
     coarse_grain: bool = False  # parcels standing for k^3 grains (particles[i].coarse_grain > 1)
+    sink: bool = False  # an outlet that removes particles below a height (counted)
+    n_meshes: int = 0  # triangle-mesh walls ([[meshes]])
+    moving_meshes: bool = False  # a mesh that rotates or translates (its triangles moved every step)
 
     @property
     def float_bytes(self) -> int:
@@ -64,7 +67,9 @@ class Features:
             (self.rolling, "rolling resistance (model C)"),
             (self.n_planes, f"plane walls ({self.n_planes})"),
             (self.n_tubes, f"tubes ({self.n_tubes})"),
+            (self.n_meshes, f"mesh walls ({self.n_meshes}" + (", moving)" if self.moving_meshes else ")")),
             (self.recycle, "outlet recycle"),
+            (self.sink, "outlet sink (particles below a height leave, counted)"),
             (self.contact_time, "contact-time observer"),
             (self.packed_bed_profiles, "packed-bed temperature profiles (against Schumann)"),
             (self.heat, heat),
@@ -81,8 +86,9 @@ class Features:
         return out + [text for wanted, text in optional if wanted]
 
 
-def scene_features(scene, n_planes: int, n_tubes: int) -> Features:
-    """The flags of a validated scene with `n_planes` planes and `n_tubes` tubes."""
+def scene_features(scene, n_planes: int, n_tubes: int, meshes=()) -> Features:
+    """The flags of a validated scene with `n_planes` planes, `n_tubes` tubes and `meshes`
+    (`tidem.mesh_walls.MeshWall`)."""
     mats = scene.materials
     law = scene.contact.model
     contacts = law != "none"
@@ -106,4 +112,7 @@ def scene_features(scene, n_planes: int, n_tubes: int) -> Features:
         growth=any(r.type == "polymerization" and r.growth for r in scene.reactions),
         averaging=scene.averaging is not None,
         coarse_grain=any(g.coarse_grain != 1.0 for g in scene.particles),
+        sink=scene.outlet is not None and scene.outlet.type == "sink",
+        n_meshes=len(meshes) if contacts else 0,
+        moving_meshes=contacts and any(m.moving for m in meshes),
     )

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from tidem.features import scene_features
 from tidem.gas_geometry import gas_grid
+from tidem.mesh_bins import mesh_field_bytes
 from tidem.scene.averaging_layout import cell_grid
 from tidem.scene.sizes import largest_parcel, max_diameter, parcel_count
 
@@ -249,7 +250,7 @@ def field_bytes(model) -> int:
     cells = model.grid.n_cells * CELL_BYTES
     if f.gas:
         cells += math.prod(gas_grid(model.scene).cells) * gas_cell_bytes(f)
-    return per * model.capacity + cells
+    return per * model.capacity + cells + mesh_field_bytes(model)
 
 
 def memory_refusal(model) -> list[str]:

@@ -6,7 +6,7 @@ Plain numpy and numbers only; `tidem.state` turns them into Taichi fields.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -17,6 +17,9 @@ from tidem.heat_limits import heat_step_errors
 from tidem.kernels.geometry import Grid, slab_axis_for
 from tidem.memory import (HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, default_neighbors, field_bytes, memory_refusal,
                           scene_refusal)
+from tidem.mesh_bins import MeshTable, mesh_table
+from tidem.mesh_load import load_mesh_walls, tube_mesh_overlaps
+from tidem.mesh_walls import pass_through_errors
 from tidem.overlaps import initial_overlaps
 from tidem.placement import place_groups
 from tidem.reactions import reaction_constants, reaction_index, reaction_step_checks
@@ -25,7 +28,7 @@ from tidem.scene.errors import SceneError
 from tidem.scene.load import LoadedScene
 from tidem.scene.sizes import max_diameter
 from tidem.surfaces import AXES, is_heated, surfaces
-from tidem.timestep import TimeScales, contact_time_step
+from tidem.timestep import TimeScales, contact_time_step, impact_speed
 
 
 @dataclass
@@ -67,6 +70,8 @@ class Model:
     reaction_constants: list | None = None
     averaging: AveragingLayout | None = None
     coarse_grain: np.ndarray | None = None  # k of each particle's group: a parcel of k^3 grains (1: a grain)
+    meshes: list = field(default_factory=list)  # [[meshes]] as tidem.mesh_walls.MeshWall
+    mesh_table: MeshTable | None = None  # their triangles and bins as the kernels hold them
 
     def uniform_particles(self) -> tuple[float, float] | None:
         """(radius, mass) where all particles have the same and keep it (no reactions), else None: the
@@ -144,9 +149,15 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         raise SceneError(src, too_big)
     mat_names = list(mats)
     planes, tubes = surfaces(scene, scene.particles[0].material)
+    meshes, errors = load_mesh_walls(scene, loaded.source, scene.particles[0].material)
+    errors = errors or tube_mesh_overlaps(scene, meshes)
+    if errors:
+        raise SceneError(src, errors)
+    walls = planes + tubes + [dict(name=m.name, material=m.material, friction=m.friction, T=m.temperature)
+                              for m in meshes]  # every surface, for the tables and the step limits
     periodic = tuple(AXES[a] in dom.periodic for a in range(3))
     lengths = [dom.max[a] - dom.min[a] for a in range(3)]
-    placed, errors = place_groups(scene, planes, tubes, lengths, periodic)
+    placed, errors = place_groups(scene, planes, tubes, lengths, periodic, meshes)
     if errors:
         raise SceneError(src, errors)
     radius, material, fixed = placed.radius, placed.material, placed.fixed
@@ -154,7 +165,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     grain_radius = radius / coarse_grain
     density = np.array([mats[m].density for m in mat_names])[material]
     mass = density * 4.0 / 3.0 * math.pi * radius**3
-    pair, surf = parameter_tables(scene, mat_names, planes + tubes)
+    pair, surf = parameter_tables(scene, mat_names, walls)
 
     contacts = scene.contact.model != "none"
     all_fixed = bool(fixed.all())
@@ -163,7 +174,9 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     if overlaps:
         raise SceneError(src, overlaps)
     dt, scales, errors = contact_time_step(scene, material, radius, placed.x0, placed.v0, placed.active0,
-                                           planes + tubes, all_fixed)
+                                           walls, all_fixed)
+    if not errors and contacts:
+        errors = pass_through_errors(meshes, dt, impact_speed(scene, placed.v0), float(radius.min()))
     if errors:
         raise SceneError(src, errors)
 
@@ -173,12 +186,14 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     heat_reach = 0.5 * fluid_layer * d_max
     grid = neighbour_grid(dom.min, lengths, periodic, len(radius), d_max + skin + heat_reach, dom.gravity)
     k = neighbour_slots(num, d_max, 2.0 * radius.min(), fluid_layer) if contacts else 1  # 1: no list is built
+    # triangles within a particle's reach (half the largest diameter, skin, gas lens) of each cell
+    table = mesh_table(meshes, grid, 0.5 * d_max + skin + heat_reach) if meshes and contacts else None
 
     heat_cap = thermal_limit = None
     if scene.heat is not None:
         c = np.array([mats[m].heat_capacity or 0.0 for m in mat_names])[material]
         heat_cap = mass * c
-        thermal_limit, errors = heat_step_errors(scene, material, radius, heat_cap, k, planes + tubes, dt, contacts,
+        thermal_limit, errors = heat_step_errors(scene, material, radius, heat_cap, k, walls, dt, contacts,
                                                    coarse_grain)
         if errors:
             raise SceneError(src, errors)
@@ -197,7 +212,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     if smoke:
         end = min(end, scene.output.smoke_steps * dt)
     model = Model(
-        name=loaded.name, loaded=loaded, features=scene_features(scene, len(planes), len(tubes)), grid=grid,
+        name=loaded.name, loaded=loaded, features=scene_features(scene, len(planes), len(tubes), meshes), grid=grid,
         capacity=len(radius), radius=radius, mass=mass, material=material, group=placed.group, x0=placed.x0,
         v0=placed.v0, active0=placed.active0, pair_params=pair, surface_params=surf, planes=planes, tubes=tubes,
         pours=placed.pours, dt=dt, scales=scales, skin=skin, max_neighbors=k,
@@ -207,7 +222,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
         averaging=averaging_layout(scene),
-        coarse_grain=coarse_grain,
+        coarse_grain=coarse_grain, meshes=meshes, mesh_table=table,
     )
     too_big = memory_refusal(model)
     if too_big:

@@ -26,6 +26,7 @@ from typing import Callable
 
 import numpy as np
 
+from tidem.drum_heat import mesh_heat_rows
 from tidem.impact_conduction import hertz_impact, quasi_static_impact_heat, sun_chen_impact_heat
 from tidem.kernels import contact_laws as cl
 from tidem.packet_model import packet_alpha
@@ -65,6 +66,8 @@ class RunRecord:
     """Packet model per heated tube (`packet_model_rows`), for a moving-plate outlet."""
     bed_profiles: dict | None = None
     """Summary of the packed-bed profiles against Schumann (`tidem.bed_profiles.profile_rows`)."""
+    mesh_rows: list[dict] = field(default_factory=list)
+    """Heat transfer of each heated mesh, and a drum's bed geometry (`tidem.drum_heat`)."""
 
 
 def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None) -> RunRecord:
@@ -79,14 +82,16 @@ def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | No
             floor = p["p0"][2] + p["vel"][2] * (min(max(solver.t, t0), t1) - t0)
     means = alpha_profile(model, solver)[1]
     ident = S.ident.to_numpy()[active]  # index in the scene's arrays (`tidem.storage_order`)
+    x, radius = S.x.to_numpy()[active], S.radius.to_numpy()[active]
     return RunRecord(
-        time_s=solver.t, x=S.x.to_numpy()[active], v=S.v.to_numpy()[active], mass=model.mass[ident],
-        radius=S.radius.to_numpy()[active], v0=model.v0[ident], floor_z=float(floor), series=series,
+        time_s=solver.t, x=x, v=S.v.to_numpy()[active], mass=model.mass[ident],
+        radius=radius, v0=model.v0[ident], floor_z=float(floor), series=series,
         temperature=S.T.to_numpy()[active] if model.features.heat else None,
         alpha_means=means,
         contact_rows=contact_times(model, solver) if model.features.contact_time else [],
         impact_rows=impact_heat_rows(model, solver) if "impact_heat" in model.scene.observables else [],
-        packet_rows=packet_model_rows(model, means), bed_profiles=bed_profiles)
+        packet_rows=packet_model_rows(model, means), bed_profiles=bed_profiles,
+        mesh_rows=mesh_heat_rows(model, x, radius, series))
 
 
 Compute = Callable[[RunRecord], dict[str, float]]
@@ -162,6 +167,43 @@ def outlet_mass_flow(rec: RunRecord) -> dict[str, float]:
     this is the outlet flux; a plug sinking at the plate speed u gives M u / H."""
     h = _top(rec) + float(rec.radius.mean()) - rec.floor_z
     return {"outlet_mass_flow_kg_s": float(np.sum(rec.mass * -rec.v[:, 2]) / h)}
+
+
+@observable("discharge_rate")
+def discharge_rate(rec: RunRecord) -> dict[str, float]:
+    """Discharge rate of a sink outlet [kg/s] (`discharge_rate_kg_s`): the least-squares slope of
+    the discharged mass over time while it lies between 10 % and 70 % of the mass discharged by the
+    end (after the flow has set in, before a bin runs low), and the same over the first and the
+    second half of that window (`discharge_rate_early_kg_s`, `discharge_rate_late_kg_s`: equal in a
+    flow independent of the fill height, as Beverloo's). NaN with fewer than four samples there."""
+    t, m = rec.series.get("time_s"), rec.series.get("discharged_mass_kg")
+    out = {k: float("nan") for k in ("discharge_rate_kg_s", "discharge_rate_early_kg_s", "discharge_rate_late_kg_s")}
+    if t is None or m is None or len(m) == 0 or m[-1] <= 0.0:
+        return out
+    pick = (m >= 0.1 * m[-1]) & (m <= 0.7 * m[-1])
+    t, m = t[pick], m[pick]
+    if len(t) < 4:
+        return out
+    half = len(t) // 2
+    out["discharge_rate_kg_s"] = float(np.polyfit(t, m, 1)[0])
+    if half >= 2 and len(t) - half >= 2:
+        out["discharge_rate_early_kg_s"] = float(np.polyfit(t[:half], m[:half], 1)[0])
+        out["discharge_rate_late_kg_s"] = float(np.polyfit(t[half:], m[half:], 1)[0])
+    return out
+
+
+@observable("wall_heat_transfer")
+def wall_heat_transfer(rec: RunRecord) -> dict[str, float]:
+    """Heat-transfer coefficient of each heated mesh [W/(m^2 K)] over the second half
+    (`tidem.drum_heat`): `meshes0_mean_alpha_W_m2K` over its whole area against the bed's mean
+    temperature, with its heat flow `meshes0_heat_W`; for a rotating mesh (a drum) also the dynamic
+    angle of repose and the filling angle [deg], the coefficient over the wetted wall and the
+    penetration model's (`meshes0_wetted_alpha_W_m2K`, `meshes0_model_alpha_W_m2K`, their ratio
+    `meshes0_over_model`, the contact time under the bed [s])."""
+    out = {}
+    for row in rec.mesh_rows:
+        out.update({f"meshes{row['mesh']}_{k}": v for k, v in row.items() if k != "mesh"})
+    return out
 
 
 @observable("mean_temperature")

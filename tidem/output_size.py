@@ -4,7 +4,8 @@ output cadence the run loop writes at.
 
 Per snapshot: the particle arrays of the .vtp (positions, radius, velocity, spin, id, group,
 contacts; temperature with heat, grains when coarse-grained) for every particle the run can
-hold, the gas .vti (eight values per cell) with a gas phase, and a PNG frame when rendering.
+hold, the gas .vti (eight values per cell) with a gas phase, a moving mesh wall's .vtp (vertices,
+temperature, triangles), and a PNG frame when rendering.
 The factor 1.2 covers the files' headers and per-array offsets (a fluidized_tube snapshot of
 12 978 particles is 1.51 MB: 116 B per particle against 100 B of arrays). The time series adds
 about 210 B per row (measured on fluidized_tube).
@@ -37,6 +38,8 @@ def output_bytes(model, frames: bool) -> tuple[int, int]:
     per_snapshot = model.capacity * per_particle
     if f.gas:
         per_snapshot += math.prod(gas_grid(model.scene).cells) * GAS_BYTES_PER_CELL
+    per_snapshot += sum(len(m.vertices) * (3 * 8 + 8 * (m.temperature is not None)) + len(m.triangles) * (3 * 8 + 8)
+                        for m in model.meshes if m.moving)  # points (temperature), connectivity and offsets
     per_snapshot = per_snapshot * OVERHEAD + FRAME_BYTES * frames
     snap_dt, series_dt = cadence(model.scene, model.t_end)
     steps = math.ceil(model.t_end / model.dt)

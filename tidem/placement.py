@@ -4,7 +4,8 @@ the groups of a scene placed (`place_groups`), and the cell-order sort key of th
 Sizes are drawn from the group's distribution with its seed (cut-offs by redrawing, not by
 clipping, so no spike at the bounds). A filled region is a simple cubic lattice of spacing
 1.02 d_max (no initial overlap), its sites jittered by up to 1 % of the spacing, filled bottom-up; sites
-that would overlap a tube or a wall are skipped.
+that would overlap a tube, a wall or a mesh wall are skipped. Given positions that overlap a mesh
+wall by more than numerics.max_overlap are refused with a message naming the particle.
 """
 
 from __future__ import annotations
@@ -13,7 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tidem.mesh_geometry import inside_mesh, point_mesh_distance
 from tidem.scene.sizes import largest_parcel, parcel_count
+
+MAX_MESH_MESSAGES = 6  # given positions inside a mesh reported one by one, per group
 
 
 class PlacementError(ValueError):
@@ -73,9 +77,14 @@ def lattice_sites(lo, hi, spacing: float, kind: str = "cubic") -> np.ndarray:
     return np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
 
 
-def clear_of_obstacles(sites: np.ndarray, radius: float, planes, tubes, lengths, periodic) -> np.ndarray:
-    """Mask of sites whose sphere of `radius` touches no plane and no tube."""
+def clear_of_obstacles(sites: np.ndarray, radius: float, planes, tubes, lengths, periodic,
+                       meshes=()) -> np.ndarray:
+    """Mask of sites whose sphere of `radius` touches no plane, no tube and no mesh; `meshes`
+    holds (vertices, triangles) pairs (exact point-triangle distances, no periodic images)."""
     ok = np.ones(len(sites), dtype=bool)
+    for vertices, triangles in meshes:
+        todo = np.flatnonzero(ok)
+        ok[todo] = point_mesh_distance(sites[todo], vertices, triangles, within=radius) > radius * (1 - 1e-9)
     for p0, n in planes:
         ok &= (sites - np.asarray(p0)) @ np.asarray(n) > radius * (1 - 1e-9)
     for centre, axis_mask, r_tube in tubes:
@@ -103,9 +112,31 @@ class Placed:
     pours: list[dict]  # one per poured group, for `tidem.pour.Pourer`
 
 
-def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic) -> tuple[Placed | None, list[str]]:
+def mesh_position_overlaps(scene, key: str, pos: np.ndarray, radius: np.ndarray, meshes) -> list[str]:
+    """Messages for given positions whose sphere enters a mesh wall by more than
+    numerics.max_overlap of its radius (the ratio (r - distance) / r of tidem.overlaps)."""
+    limit = scene.numerics.max_overlap
+    out: list[str] = []
+    for mesh in meshes:
+        dist = point_mesh_distance(pos, mesh.vertices, mesh.triangles, within=float(radius.max()))
+        ratio = (radius - dist) / radius
+        bad = np.flatnonzero(ratio > limit)
+        for i in bad[:MAX_MESH_MESSAGES]:
+            out.append(f"{key}.positions[{i}]: overlaps {mesh.name} by {100 * ratio[i]:.0f} % of its radius at "
+                       f"{np.round(pos[i], 6).tolist()} (limit numerics.max_overlap = {100 * limit:g} %); move it "
+                       f"clear of the mesh (centre at least {radius[i]:.3g} m from it)"
+                       + (f" ({len(bad)} particles of this group overlap it in all)" if len(bad) > 1 and i == bad[0]
+                          else ""))
+    return out
+
+
+def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic,
+                 meshes=()) -> tuple[Placed | None, list[str]]:
     """Sizes, positions and velocities of every particle group (given positions, a region filled
-    bottom-up, or a pour), or None and the messages of the groups that cannot be placed."""
+    bottom-up, or a pour), or None and the messages of the groups that cannot be placed.
+    `meshes` (tidem.mesh_walls.MeshWall, at t = 0): lattice sites that overlap one are skipped,
+    given positions that overlap one by more than numerics.max_overlap are refused."""
+    mesh_geo = [(m.vertices, m.triangles) for m in meshes]
     dom = scene.domain
     mat_names = list(scene.materials)
     radius, material, group, x0, v0, active0, pours = [], [], [], [], [], [], []
@@ -121,14 +152,22 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
             sites = lattice_sites(g.region.min, g.region.max, spacing, g.lattice)
             plane_geo = [(p["p0"], p["n"]) for p in planes]
             tube_geo = [(t["c"], t["mask"], t["r"]) for t in tubes]
-            sites = sites[clear_of_obstacles(sites, 0.5 * spacing, plane_geo, tube_geo, lengths, periodic)]
+            sites = sites[clear_of_obstacles(sites, 0.5 * spacing, plane_geo, tube_geo, lengths, periodic, mesh_geo)]
+            if g.inside_mesh is not None:
+                inside = inside_mesh(sites, *mesh_geo[g.inside_mesh])
+                if inside is None:
+                    errors.append(f"{key}.inside_mesh: {meshes[g.inside_mesh].name} has no inside (it is neither "
+                                  "closed nor open only at its two ends along an axis, like a drum); drop "
+                                  "'inside_mesh' and fit 'region' inside it")
+                    continue
+                sites = sites[inside]
             if count is None:
                 count = len(sites)
             if len(sites) == 0 or len(sites) < count:
                 asked = f"{count}" if g.coarse_grain == 1.0 else f"{count} parcels ({g.count} grains / k^3)"
                 errors.append(
                     f"{key}: the region holds at most {len(sites)} particles of diameter {spacing / 1.02:g} m clear of "
-                    f"walls and tubes, but {asked} were asked for; enlarge 'region' or lower 'count'"
+                    f"walls, tubes and meshes, but {asked} were asked for; enlarge 'region' or lower 'count'"
                 )
                 continue
         try:
@@ -140,6 +179,10 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
             pos = np.asarray(g.positions, float)
             vel = np.asarray(g.velocities, float) if g.velocities is not None else np.tile(g.velocity, (count, 1))
             act = np.ones(count, bool)
+            found = mesh_position_overlaps(scene, key, pos, 0.5 * d, meshes)
+            if found:
+                errors += found
+                continue
         elif g.region is not None:
             # fill bottom-up; random order within each layer
             layer = np.unique(np.round(sites[:, 2], 9), return_inverse=True)[1]

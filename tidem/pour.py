@@ -2,8 +2,9 @@
 
 At time t a group with rate R [1/s] starting at t0 should have min(count, R (t - t0))
 particles in the domain. Missing ones are placed at random points of the pour region that
-clear every active particle, wall and tube (rejection sampling, at most 30 tries per
-particle and step); whatever does not fit waits for the next step.
+clear every active particle, wall, tube and mesh wall (a moving mesh where it is at time t;
+rejection sampling, at most 30 tries per particle and step); whatever does not fit waits for
+the next step.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ class Pourer:
             return 0
         self._next_check = t + 20 * self.model.dt  # batch insertions
         S, m = self.state, self.model
-        x = active = None
+        x = active = meshes = None
         added = 0
         for g in self.groups:
             due = min(g["count"], int(g["rate"] * max(t - g["start"], 0.0))) - g["inserted"]
@@ -46,6 +47,8 @@ class Pourer:
                 x = S.x.to_numpy()
                 active = S.active.to_numpy()
                 v = S.v.to_numpy()
+            if meshes is None:  # mesh walls where they are at time t
+                meshes = [(w.points_at(t), w.triangles) for w in getattr(m, "meshes", None) or []]
             lo, hi = np.array(g["region"].min), np.array(g["region"].max)
             for k in range(due):
                 i = g["first"] + g["inserted"]
@@ -54,7 +57,7 @@ class Pourer:
                     p = g["rng"].uniform(lo + r, hi - r)
                     if not clear_of_obstacles(p[None], r, [(q["p0"], q["n"]) for q in m.planes],
                                               [(q["c"], q["mask"], q["r"]) for q in m.tubes],
-                                              self.lengths, self.periodic)[0]:
+                                              self.lengths, self.periodic, meshes)[0]:
                         continue
                     near = active.astype(bool)
                     d = x[near] - p

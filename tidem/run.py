@@ -19,6 +19,7 @@ from tidem import __version__, checkpoint
 from tidem import observables as obs
 from tidem.averaging import AverageRecorder, write_averages
 from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
+from tidem.io.mesh_output import MeshOutput, mesh_geometry
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.model import Model
@@ -42,7 +43,8 @@ class RunResult:
 
 
 class Output:
-    """Snapshots (vtp + pvd), timeseries.csv and run.json of one run folder."""
+    """Snapshots (vtp + pvd), the mesh walls (meshes/ + meshes.pvd), timeseries.csv and run.json
+    of one run folder."""
 
     def __init__(self, out_dir: Path, model: Model, loop: dict | None = None):
         """A fresh run folder, or with `loop` (a checkpoint's run-loop state) the folder of the
@@ -72,6 +74,7 @@ class Output:
                 write_pvd(self.dir / pvd, entries)
             else:
                 (self.dir / pvd).unlink(missing_ok=True)
+        self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
         self.reactions = (ReactionLog(self.dir, model, [tuple(r) for r in loop.get("reaction_rows", [])] if loop else None)
                           if model.features.reactions else None)
@@ -100,6 +103,7 @@ class Output:
             "contacts": S.ncontact.to_numpy()[idx].astype(np.int32),
         }, time=solver.t)
         self.entries.append((solver.t, f"snapshots/{name}"))
+        self.meshes.snapshot()
         if self.gas_dir is not None:
             gg = solver.gas.gg
             write_vti(self.gas_dir / name.replace("snap_", "gas_").replace(".vtp", ".vti"), gg.lo, gg.h, gg.cells,
@@ -118,6 +122,7 @@ class Output:
         row = {"time_s": solver.t, "step": solver.steps}
         row.update(solver.energies())
         row["max_overlap_ratio"] = float(solver.state.ovl.to_numpy().max()) if solver.n else 0.0
+        row.update(solver.outlet_summary())
         if self.model.features.heat:
             row.update(solver.heat_summary())
         if solver.gas is not None:
@@ -202,6 +207,7 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
             "periodic": list(model.grid.periodic),
             "tubes": [{"c": t["c"], "mask": t["mask"], "r": t["r"], "T": t["T"]} for t in model.tubes],
             "distributor": distributor_parts(model.scene),
+            "meshes": mesh_geometry(model.meshes),
         },
     }
     return out

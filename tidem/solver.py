@@ -30,13 +30,15 @@ from tidem.kernels.reactions import make_reaction_kernel
 from tidem.kernels.contact import make_force_kernel
 from tidem.kernels.diagnostics import make_energy_kernel
 from tidem.kernels.integrate import make_integrators
-from tidem.kernels.outlet import make_recycle_kernel
+from tidem.kernels.mesh_contact import make_mesh_mover
+from tidem.kernels.outlet import make_recycle_kernel, make_sink_kernel
 from tidem.gas import GasError, GasPhase
+from tidem.mesh_bins import MESH_CANDIDATES, MESH_SLOTS, bin_triangles
 from tidem.model import Model
 from tidem.phases import PhaseTimer, clock
 from tidem.pour import Pourer
 from tidem.runtime import hot
-from tidem.state import State, allocate
+from tidem.state import State, allocate, load_bins
 from tidem.storage_order import SORT_MIN_PARTICLES, sort_storage
 from tidem.surfaces import is_heated
 
@@ -55,6 +57,19 @@ def quiet_margin(model: Model) -> float:
 
 class RunError(RuntimeError):
     """The simulation became invalid; the message names the particle or setting and the fix."""
+
+
+def mesh_settings(model: Model) -> tuple[int, int, int, float] | None:
+    """What the contact kernel needs of the mesh walls (`kernels/mesh_contact.py`): their number, the
+    candidate triangles and contact slots per particle, and the tolerance [m] within which a closest
+    point lies on another triangle (1e-6 of the smallest radius plus 64 rounding units of the largest
+    coordinate); None without meshes."""
+    if not model.features.n_meshes:
+        return None
+    g = model.grid
+    largest = max(max(abs(lo), abs(lo + L)) for lo, L in zip(g.lo, g.length))
+    eps = np.finfo(np.float32 if model.features.float_bytes == 4 else np.float64).eps
+    return model.features.n_meshes, MESH_CANDIDATES, MESH_SLOTS, 1e-6 * float(model.radius.min()) + 64 * eps * largest
 
 
 def static_surfaces(model: Model) -> int:
@@ -87,6 +102,11 @@ class Solver:
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, self.state)
         self._build_sources_and_sinks()
+        self._move_meshes = None
+        self.mesh_t_build = 0.0  # time of the last binning of the moving meshes (`rebuild`)
+        if f.moving_meshes:
+            self._move_meshes = hot(make_mesh_mover(self.state, [
+                (m.moving, m.center, m.axis, m.speed, m.velocity) for m in model.meshes]))
         self._average = None
         if f.averaging:
             a = model.averaging
@@ -111,10 +131,10 @@ class Solver:
                                    model.one_material(), f.heat, model.angle_bins, model.fluid_layer,
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
                                    model.skin + model.heat_reach, model.grain_scale, uniform=model.uniform_particles(),
-                                   quiet_margin=quiet_margin(model))
+                                   quiet_margin=quiet_margin(model), meshes=mesh_settings(model))
         self._rebuild = None
-        if f.contacts:  # one launch: the list, then the surfaces in reach (culling)
-            after = (forces.mark_near,) if forces.mark_near is not None else ()
+        if f.contacts:  # one launch: the list, then the surfaces in reach (culling), then the meshes' triangles
+            after = tuple(fn for fn in (forces.mark_near, forces.list_meshes) if fn is not None)
             self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
                                                       f.rolling, f.hysteretic, S, f.growth, after, model.uniform_particles()))
         return forces
@@ -128,7 +148,7 @@ class Solver:
         finish = (forces.finish,) if forces.finish is not None else ()
         if self._fused and self.gas:
             finish += (self.gas.force,)
-        kernels = make_integrators(model.grid, self.state, f.heat, f.n_planes + f.n_tubes, model.angle_bins, f.foil,
+        kernels = make_integrators(model.grid, self.state, f.heat, f.n_planes + f.n_tubes + f.n_meshes, model.angle_bins, f.foil,
                                    f.growth, f.wall_foil, f.n_planes, finish, forces if self._fused else None)
         self._kick_drift, self._kick, self._forces_and_kick = (hot(k) if k is not None else None for k in kernels)
 
@@ -140,6 +160,8 @@ class Solver:
         if f.recycle:
             o = model.scene.outlet
             self._recycle = make_recycle_kernel(o.height, o.reinsert_height, model.wall_slots, S)
+        elif f.sink:
+            self._recycle = make_sink_kernel(model.scene.outlet.height, model.wall_slots, S)
         self.pourer = Pourer(model, S) if model.pours else None
         self._react = None
         if f.reactions:
@@ -203,6 +225,9 @@ class Solver:
         self.steps += 1
         need = self.state.max_disp[None] > self._rebuild_disp2
         self._drift_done = False
+        if self._move_meshes is not None:
+            self._move_meshes(self.t)
+            need |= self._meshes_moved() > 0.5 * self.model.skin
         t = lap("kick-drift", t)
         if self._recycle is not None:
             need |= self._recycle(self.n) > 0
@@ -249,9 +274,22 @@ class Solver:
         """Add the particles now to the time-averaged fields of [averaging] (`tidem.averaging`)."""
         self._average(self.n)
 
+    def _meshes_moved(self) -> float:
+        """How far the moving meshes may have moved since they were last binned [m] (a bound)."""
+        return max(m.displacement_bound(self.mesh_t_build, self.t) for m in self.model.meshes)
+
     def rebuild(self) -> None:
         """Neighbour list (none with contact.model = 'none'); every numerics.sort_interval
-        rebuilds the storage is first re-sorted into cell order (`tidem.storage_order`)."""
+        rebuilds the storage is first re-sorted into cell order (`tidem.storage_order`). Moving
+        meshes are binned anew where they are now (`tidem.mesh_bins`)."""
+        if self._move_meshes is not None:
+            tab = self.model.mesh_table
+            start, tri = bin_triangles(tab.at(self.model.meshes, self.t), self.model.grid, tab.inflate)
+            if len(tri) > tab.bin_capacity:
+                raise RunError(f"mesh bins overflow: the moving meshes' triangles fill {len(tri)} cell entries, room "
+                               f"for {tab.bin_capacity}; coarsen the mesh or lower numerics.skin")
+            load_bins(self.state, start, tri)
+            self.mesh_t_build = self.t
         if self._rebuild is not None:
             if self._sort_every and self.rebuilds % self._sort_every == 0:
                 sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
@@ -274,8 +312,12 @@ class Solver:
                 f"{self.model.max_neighbors}; set numerics.max_neighbors = {min(int(over[0] * 1.25) + 1, 512)}")
         if over[1] > 0:
             raise RunError(
-                f"wall contact overflow: a particle touches more than {self.model.wall_slots} walls/tubes at once; "
-                f"raise numerics.max_wall_contacts")
+                f"wall contact overflow: a particle touches more than {self.model.wall_slots} walls/tubes (or "
+                f"{MESH_SLOTS} mesh faces) at once; raise numerics.max_wall_contacts")
+        if over[3] > 0:
+            raise RunError(
+                f"mesh contact overflow: a particle has {over[3]} mesh triangles within reach, room for "
+                f"{MESH_CANDIDATES}; coarsen the mesh near the particles or lower numerics.skin")
         if over[2] > 0:
             raise RunError(
                 f"neighbour list: {over[2]} contacts that changed owner at a rebuild lost their history (more than "
@@ -295,6 +337,13 @@ class Solver:
                 f"particle {S.ident[i]} overlaps a neighbour or wall by {100 * ovl[i]:.1f} % of its radius at t = {self.t:.6g} s "
                 f"(limit {100 * limit:.0f} %): the contacts are too soft or too fast for this step; raise "
                 "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
+
+    def outlet_summary(self) -> dict:
+        """Mass [kg] and number of the particles a sink outlet has taken (empty without one)."""
+        if not self.model.features.sink:
+            return {}
+        mass, count = self.state.sink_sum.to_numpy()
+        return dict(discharged_mass_kg=float(mass), discharged_particles=int(count))
 
     def energies(self) -> dict:
         """Kinetic, rotational and potential energy [J], contacts per particle, active count."""
@@ -316,7 +365,8 @@ class Solver:
         n_planes = len(self.model.planes)
         foil_T = list(S.plane_foil_T.to_numpy() if f.wall_foil else [None] * n_planes)
         foil_T += list(S.tube_bin_T.to_numpy().mean(axis=1) if f.foil else [None] * len(self.model.tubes))
-        for s, surf in enumerate(self.model.planes + self.model.tubes):
+        meshes = [dict(name=m.name, T=m.temperature) for m in self.model.meshes]
+        for s, surf in enumerate(self.model.planes + self.model.tubes + meshes):
             if is_heated(surf):
                 key = surf["name"].replace(" ", "_").replace("[", "").replace("]", "")
                 out[f"{key}_heat_W"] = float(rate[s])

@@ -62,6 +62,7 @@ import taichi as ti
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.averaging import channels
 from tidem.kernels.geometry import slab_layout
+from tidem.mesh_bins import MESH_CANDIDATES, MESH_SLOTS
 from tidem.model import Model
 from tidem.reactions import N_SUMS
 from tidem.surfaces import angle_bin_area
@@ -193,6 +194,32 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.S.flips = ti.field(ti.i32)
     p.fb.place(p.S.max_disp, p.S.flips)
     p.place((3,), "slab_next", ti.i32)  # the contact passes' slab counters (kernels/contact.py)
+    if feat.n_meshes:
+        _place_mesh_fields(p, model)
+
+
+def _place_mesh_fields(p: _Placer, model: Model) -> None:
+    """Mesh triangles, their bins, each particle's candidate triangles and mesh contact slots
+    (`kernels/mesh_contact.py`)."""
+    N, tab = model.capacity, model.mesh_table
+    T = len(tab.mesh_id)
+    p.place((T, 3), "tri_v", n=3)
+    p.place((T,), "tri_mesh", ti.i32)
+    if model.features.moving_meshes:
+        p.place((T, 3), "tri_rest", n=3)
+        p.place((T,), "tri_shift", n=3)
+    p.place((model.grid.n_cells + 1,), "mbin_start", ti.i32)
+    p.place((tab.bin_capacity,), "mbin_tri", ti.i32)
+    p.place((len(model.meshes), 4), "mesh_motion", n=3)
+    p.per_particle((N,), "mc_n", ti.i32)
+    p.per_particle((N, MESH_CANDIDATES), "mc_tri", ti.i32)
+    p.per_particle((N, MESH_SLOTS), "mh_id", ti.i32)
+    for name in ("mh_n", "mh_ft"):
+        p.per_particle((N, MESH_SLOTS), name, n=3)
+    if model.features.rolling:
+        p.per_particle((N, MESH_SLOTS), "mh_mr", n=3)
+    if model.features.hysteretic:
+        p.per_particle((N, MESH_SLOTS), "mh_dmax")
 
 
 def _place_heat_fields(p: _Placer, model: Model) -> None:
@@ -201,7 +228,7 @@ def _place_heat_fields(p: _Placer, model: Model) -> None:
     feat = model.features
     for name in ("T", "q", "inv_heat_cap"):
         p.per_particle((N,), name)
-    NS = max(len(model.planes) + len(model.tubes), 1)
+    NS = max(len(model.planes) + len(model.tubes) + len(model.meshes), 1)
     p.place((NS,), "surf_T")
     p.place((NS,), "surf_rate")
     p.place((NS,), "surf_energy", ti.f64)
@@ -273,7 +300,9 @@ def allocate(model: Model) -> State:
         _place_reaction_fields(p, model)
     if feat.averaging:
         _place_averaging_fields(p, model)
-    p.place((3,), "overflow", ti.i32)
+    p.place((4,), "overflow", ti.i32)
+    if feat.sink:
+        p.place((2,), "sink_sum", ti.f64)  # mass [kg] and number of the particles gone (kernels/outlet.py)
     p.place((5,), "sums")
     S._tree = p.fb.finalize()
     _fill_particles(S, model)
@@ -322,6 +351,7 @@ def _fill_heat(S: State, model: Model) -> None:
     S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
     T0 = model.scene.heat.initial_temperature  # a foil's own temperature is in tube_bin_T
     temps = [T0 if s.get("flux") is not None else s["T"] for s in model.planes + model.tubes]
+    temps += [m.temperature for m in model.meshes]
     S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
     if feat.foil:
         S.tube_foil.from_numpy(np.array([foil_vector(t, model) for t in model.tubes]))
@@ -338,7 +368,31 @@ def _fill_surfaces(S: State, model: Model) -> None:
     """The parameter tables and the geometry of the tubes."""
     S.pp.from_numpy(model.pair_params)
     S.ps.from_numpy(model.surface_params)
+    if model.features.n_meshes:
+        _fill_meshes(S, model)
     if model.tubes:
         S.tube_c.from_numpy(np.array([t["c"] for t in model.tubes], float))
         S.tube_mask.from_numpy(np.array([t["mask"] for t in model.tubes], float))
         S.tube_r.from_numpy(np.array([t["r"] for t in model.tubes], float))
+
+
+def _fill_meshes(S: State, model: Model) -> None:
+    """Triangles at t = 0, their bins, the meshes' motion (v, Omega, centre, surface velocity)."""
+    tab = model.mesh_table
+    S.tri_v.from_numpy(tab.rest + tab.shift[:, None, :])
+    S.tri_mesh.from_numpy(tab.mesh_id)
+    if model.features.moving_meshes:
+        S.tri_rest.from_numpy(tab.rest)
+        S.tri_shift.from_numpy(tab.shift)
+    load_bins(S, tab.start, tab.tri)
+    S.mesh_motion.from_numpy(np.array([[m.velocity, np.asarray(m.axis) * m.speed, m.center, m.surface_velocity]
+                                       for m in model.meshes], float))
+    S.mh_id.fill(-1)
+
+
+def load_bins(S: State, start: np.ndarray, tri: np.ndarray) -> None:
+    """Put the triangles' cell lists (`tidem.mesh_bins.bin_triangles`) into mbin_start / mbin_tri."""
+    S.mbin_start.from_numpy(start)
+    full = np.zeros(S.mbin_tri.shape[0], np.int32)
+    full[:len(tri)] = tri
+    S.mbin_tri.from_numpy(full)

@@ -125,20 +125,27 @@ def too_soft(scene, law, mats, mat_names, material, radius, x0, active, speed) -
     return out
 
 
+def impact_speed(scene, v0: np.ndarray) -> float:
+    """The impact speed the contacts are sized for [m/s]: numerics.impact_velocity, else the larger of
+    twice the fastest start velocity and the free fall over the domain's height (at least 1 cm/s)."""
+    dom, num = scene.domain, scene.numerics
+    if num.impact_velocity is not None:
+        return num.impact_velocity
+    vmax = float(np.linalg.norm(v0, axis=1).max()) if len(v0) else 0.0
+    height = dom.max[2] - dom.min[2]
+    return max(2.0 * vmax, math.sqrt(2.0 * abs(dom.gravity[2]) * height), 0.01)
+
+
 def contact_time_step(scene, material: np.ndarray, radius: np.ndarray, x0: np.ndarray, v0: np.ndarray,
                       active: np.ndarray, surfaces: list[dict], all_fixed: bool) -> tuple[float, TimeScales, list[str]]:
     """The time step from the stiffest, lightest contact (`numerics.dt`, else dt_fraction times
     the reference time), its time scales, and the refusals: contacts too soft for the bed
     (`too_soft`) or a step above the stability limit. With every particle fixed nothing moves,
     so no contact can become unstable and the contact limits do not bind the step."""
-    dom, mats, num = scene.domain, scene.materials, scene.numerics
+    mats, num = scene.materials, scene.numerics
     law = scene.contact.model
     mat_names = list(mats)
-    speed = num.impact_velocity
-    if speed is None:
-        vmax = float(np.linalg.norm(v0, axis=1).max()) if len(v0) else 0.0
-        height = dom.max[2] - dom.min[2]
-        speed = max(2.0 * vmax, math.sqrt(2.0 * abs(dom.gravity[2]) * height), 0.01)
+    speed = impact_speed(scene, v0)
     scales = None
     for mi, mname in enumerate(mat_names):
         sel = material == mi

@@ -1,5 +1,5 @@
-"""VTK XML PolyData (.vtp) snapshots, ImageData (.vti) gas fields, and the ParaView
-collection (.pvd) that indexes them.
+"""VTK XML PolyData (.vtp) snapshots and triangle meshes, ImageData (.vti) gas fields, and the
+ParaView collection (.pvd) that indexes them.
 
 Written directly with numpy (raw appended binary, little-endian, UInt64 block headers), so a
 simulation never imports VTK. Each file is written to a temporary name and renamed, so an
@@ -71,6 +71,23 @@ def write_vtp(path: Path, points: np.ndarray, point_data: dict[str, np.ndarray],
                 f"<Verts>{conn_tag}{offs_tag}</Verts></Piece></PolyData>")
 
 
+def write_vtp_triangles(path: Path, points: np.ndarray, triangles: np.ndarray,
+                        point_data: dict[str, np.ndarray] | None = None, time: float | None = None) -> None:
+    """Write a triangle surface: points (V, 3), triangles (T, 3) indices into them, per-point
+    arrays (V,) or (V, 3), as the polygons of a PolyData."""
+    tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    block = _Appended()
+    pts_tag = block.tag("Points", np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3))
+    pd_tags = "".join(block.tag(k, np.ascontiguousarray(v)) for k, v in (point_data or {}).items())
+    conn_tag = block.tag("connectivity", tri.ravel())
+    offs_tag = block.tag("offsets", np.arange(3, 3 * len(tri) + 1, 3, dtype=np.int64))
+    field = block.time_field(time)
+    block.write(path, "PolyData",
+                f'<PolyData>{field}<Piece NumberOfPoints="{len(points)}" NumberOfVerts="0" NumberOfLines="0" '
+                f'NumberOfStrips="0" NumberOfPolys="{len(tri)}">\n<PointData>{pd_tags}</PointData><Points>{pts_tag}</Points>\n'
+                f"<Polys>{conn_tag}{offs_tag}</Polys></Piece></PolyData>")
+
+
 def _cells_x_fastest(v: np.ndarray) -> np.ndarray:
     """VTK's cell order (x fastest) of an (nx, ny, nz) or (nx, ny, nz, 3) array."""
     if v.ndim == 3:
@@ -114,6 +131,23 @@ def read_vtp(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     return points, out
 
 
+def read_vtp_triangles(path: Path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Read a file written by `write_vtp_triangles` back into (points, triangles, point_data)."""
+    import re
+
+    data = Path(path).read_bytes()
+    head, _, tail = data.partition(b'<AppendedData encoding="raw">\n_')
+    polys = re.search(r"<Polys>(.*?)</Polys>", head.decode(), re.S)
+    if polys is None:
+        raise ValueError(f"{path} holds no triangles")
+    m = re.search(r'Name="connectivity" NumberOfComponents="1" format="appended" offset="(\d+)"', polys.group(1))
+    off = int(m.group(1))
+    size = int(np.frombuffer(tail[off:off + 8], "<u8")[0])
+    triangles = np.frombuffer(tail[off + 8: off + 8 + size], "<i8").reshape(-1, 3)
+    points, point_data = read_vtp(path)
+    return points.reshape(-1, 3), triangles, point_data
+
+
 def read_vti(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     """Read a file written by `write_vti` back into ({cells, origin, spacing, time},
     {name: array of shape cells or cells + (3,)})."""
@@ -144,9 +178,12 @@ def read_vti(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     return grid, out
 
 
-def write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
-    """The collection file: one DataSet per (time, relative file name)."""
-    rows = "\n".join(f'    <DataSet timestep="{t:.9g}" group="" part="0" file="{f}"/>' for t, f in entries)
+def write_pvd(path: Path, entries: list[tuple[float, str]], parts: list[int] | None = None) -> None:
+    """The collection file: one DataSet per (time, relative file name); `parts` numbers the
+    datasets shown together at one time (ParaView reads them as the blocks of a multiblock)."""
+    parts = parts or [0] * len(entries)
+    rows = "\n".join(f'    <DataSet timestep="{t:.9g}" group="" part="{k}" file="{f}"/>'
+                     for (t, f), k in zip(entries, parts))
     text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
             f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n")
     _atomic_write(Path(path), text.encode())

@@ -5,8 +5,9 @@ Spheres are point sprites (VTK's point-Gaussian mapper with a per-point scale ar
 indistinguishable at video resolution. Particles under half a pixel in radius (fine powders,
 the 10 um grains of the plasma scene) are drawn two pixels in radius so that they show; larger
 ones keep their size. One colour
-range is used for the whole movie, so colours mean the same in every frame. Tubes are drawn as cylinders, the domain as an
-outline, and the simulated time as a stamp.
+range is used for the whole movie, so colours mean the same in every frame. Tubes are drawn as cylinders, triangle-mesh
+walls as surfaces with their front half cut away (`tidem.render.meshes`), the domain as an outline, and the simulated
+time as a stamp.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import numpy as np
 
 from tidem.io.vtp import read_vtp
 from tidem.render.gl import prepare_offscreen
+from tidem.render.meshes import add_meshes
 
 FIELDS = {
     "speed": ("Speed [m/s]", "viridis"),
@@ -44,6 +46,7 @@ class FrameStyle:
     periodic: tuple[bool, bool, bool] = (False, False, False)
     slice_thickness: float | None = None
     distributor: list[dict] = dc_field(default_factory=list)  # gas inlet parts: x, y ranges [m], velocity [m/s]
+    meshes: list = dc_field(default_factory=list)  # tidem.mesh_walls.MeshWall at t = 0 (tidem.render.meshes.load_meshes)
 
 
 def field_values(field: str, data: dict) -> np.ndarray:
@@ -199,6 +202,7 @@ def render_frame(snapshot: Path, time: float, style: FrameStyle, out_png: Path) 
             centre[axis] = 0.5 * (lo + hi)[axis]
             cyl = pv.Cylinder(center=centre, direction=axis.astype(float), radius=t["r"], height=length, resolution=64)
             pl.add_mesh(cyl.clip_box(style.bounds, invert=False), color=tube_colour(t, style), lighting=False)
+    add_meshes(pl, style, time)
     for part in distributor_boxes(style):
         pl.add_mesh(pv.Box(bounds=part["bounds"]), color=part["colour"], lighting=False)
     pl.add_mesh(pv.Box(bounds=style.bounds).outline(), color="black", line_width=1)

@@ -17,6 +17,7 @@ import numpy as np
 
 from tidem.io.vtp import read_vtp
 from tidem.render.frames import FIELDS, FrameStyle, field_values, frame_size, render_frame
+from tidem.render.meshes import load_meshes
 
 
 def snapshots(run_dir: Path) -> list[tuple[float, Path]]:
@@ -46,7 +47,8 @@ def auto_range(field: str, snaps: list[tuple[float, Path]]) -> tuple[float, floa
 
 def style_for(run_dir: Path, field: str | None = None, clim=None, view: str | None = None,
               slice_thickness: float | None = None) -> FrameStyle:
-    """Frame style from the run's run.json (geometry and [render] table) and overrides."""
+    """Frame style from the run's run.json (geometry and [render] table) and overrides; the mesh
+    walls are read from the run folder here, once for all frames."""
     info = json.loads((Path(run_dir) / "run.json").read_text())
     geo = info["render_geometry"]
     settings = info.get("render", {})
@@ -61,6 +63,7 @@ def style_for(run_dir: Path, field: str | None = None, clim=None, view: str | No
     return FrameStyle(field=field, clim=tuple(clim), colormap=settings.get("colormap") or FIELDS[field][1],
                       size=frame_size(view, bounds, settings.get("height", 720)), view=view, bounds=bounds,
                       tubes=geo["tubes"], periodic=tuple(geo["periodic"]), distributor=geo.get("distributor", []),
+                      meshes=load_meshes(run_dir, geo.get("meshes", [])),
                       slice_thickness=slice_thickness if slice_thickness is not None else settings.get("slice"))
 
 

@@ -6,11 +6,11 @@ so frames rendered during the run and afterwards are identical. The scene's `ren
 wins; otherwise the range follows from the scene alone:
 
 - temperature: lowest to highest temperature the scene sets (initial particle temperatures,
-  fixed-temperature walls and tubes). Conduction without heat sources obeys the maximum
-  principle, so no particle ever leaves this range.
+  fixed-temperature walls, tubes and mesh walls). Conduction without heat sources obeys the
+  maximum principle, so no particle ever leaves this range.
 - speed: 0 to the largest speed the scene sets or can give by falling: initial particle
-  speeds, wall and outlet plate speeds, and the free-fall speed sqrt(2 |g| H) over the
-  domain's extent H along gravity.
+  speeds, wall and outlet plate speeds, the fastest point of a moving mesh wall, and the
+  free-fall speed sqrt(2 |g| H) over the domain's extent H along gravity.
 - radius: smallest to largest radius; group: 0 to the last group; contacts: 0 to 12 (the
   kissing number of equal spheres).
 
@@ -39,6 +39,7 @@ def default_range(model, field: str) -> tuple[float, float]:
     if field == "temperature":
         temps = list(model.temperature0) if model.temperature0 is not None else []
         temps += [s["T"] for s in model.planes + model.tubes if s.get("T") is not None]
+        temps += [m.temperature for m in model.meshes if m.temperature is not None]
         return _widened(float(min(temps, default=0.0)), float(max(temps, default=0.0)))
     if field == "speed":
         g = np.asarray(scene.domain.gravity, dtype=float)
@@ -47,6 +48,7 @@ def default_range(model, field: str) -> tuple[float, float]:
         fall = math.sqrt(2.0 * g_norm * abs(float(extent @ g)) / g_norm) if g_norm > 0 else 0.0
         speeds = [float(np.linalg.norm(model.v0, axis=1).max(initial=0.0)), fall]
         speeds += [float(np.linalg.norm(p["vel"])) for p in model.planes]
+        speeds += [float(np.linalg.norm(m.velocity)) + abs(m.speed) * m.reach_from_axis() for m in model.meshes]
         return _widened(0.0, max(speeds))
     if field == "radius":
         return _widened(float(model.radius.min()), float(model.radius.max()))

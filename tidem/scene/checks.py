@@ -17,6 +17,7 @@ def heat_checks(scene: Scene) -> list[str]:
     temps += [(f"walls[{i}].heat_flux", w.heat_flux) for i, w in enumerate(scene.walls)]
     temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
     temps += [(f"tubes[{i}].heat_flux", t.heat_flux) for i, t in enumerate(scene.tubes)]
+    temps += [(f"meshes[{i}].temperature", m.temperature) for i, m in enumerate(scene.meshes)]
     if scene.heat is None:
         if scene.render.field == "temperature":
             errs.append("render.field: 'temperature' needs a [heat] table (particles have no temperature without it)")
@@ -174,9 +175,10 @@ def no_contact_checks(scene: Scene) -> list[str]:
     if scene.domain.wall_sides():
         errs.append("contact.model: 'none' builds no contact forces, so particles would pass through the box walls; "
                     "set domain.walls = \"none\" (or choose a contact law)")
-    for key in ("walls", "tubes"):
+    for key in ("walls", "tubes", "meshes"):
         if getattr(scene, key):
-            errs.append(f"{key}: contact.model = 'none' computes no wall or tube contacts; remove them or choose a contact law")
+            errs.append(f"{key}: contact.model = 'none' computes no wall, tube or mesh contacts; remove them or choose "
+                        "a contact law")
     if scene.outlet is not None and scene.outlet.type == "moving_plate":
         errs.append("outlet: a moving plate needs contacts; remove it or choose a contact law")
     if scene.numerics.dt is None:
@@ -206,6 +208,46 @@ def averaging_checks(scene: Scene) -> list[str]:
     if not scene.tubes:
         errs += [f"averaging.{key}: ring sectors are averaged around tubes and the scene has none; remove the key"
                  for key in ("ring_width", "rings", "ring_sectors") if key in avg.model_fields_set]
+    return errs
+
+
+def tube_overlap_checks(scene: Scene) -> list[str]:
+    """Tubes are solid cylinders: two may not overlap. Along one axis they overlap where their
+    centre lines lie closer than the sum of the radii in the cross-section; an x tube and a y
+    tube cross somewhere (both are infinite), so they overlap where their heights differ by less
+    than the sum of the radii. On a periodic axis the nearest image counts."""
+    dom = scene.domain
+    errs: list[str] = []
+    for i, a in enumerate(scene.tubes):
+        for j in range(i + 1, len(scene.tubes)):
+            b = scene.tubes[j]
+            reach = 0.5 * (a.diameter + b.diameter)
+            across = [k for k in range(3) if AXES[k] not in (a.axis, b.axis)]
+            d = []
+            for k in across:
+                dk = b.center[k] - a.center[k]
+                if AXES[k] in dom.periodic:
+                    length = dom.max[k] - dom.min[k]
+                    dk -= length * round(dk / length)
+                d.append(dk)
+            gap = sum(x * x for x in d) ** 0.5
+            if gap < reach * (1 - 1e-9):
+                how = ("their axes lie" if a.axis == b.axis else f"the {a.axis} and {b.axis} tubes cross, their "
+                       "heights")
+                errs.append(f"tubes[{i}] and tubes[{j}] overlap: {how} {gap:.4g} m apart, less than the sum of their "
+                            f"radii {reach:.4g} m; move one (its center) or make them thinner")
+    return errs
+
+
+def mesh_checks(scene: Scene) -> list[str]:
+    """What the [[meshes]] tables can be checked for without reading their files (the files
+    are read by the Model: tidem.mesh_load)."""
+    errs = [f"particles[{i}].inside_mesh: there is no meshes[{g.inside_mesh}] ({len(scene.meshes)} [[meshes]] "
+            f"in the scene)" for i, g in enumerate(scene.particles)
+            if g.inside_mesh is not None and g.inside_mesh >= len(scene.meshes)]
+    if scene.meshes and scene.gas is not None:
+        errs.append("meshes: mesh walls in a scene with [gas] are not supported yet (the gas grid does not see them); "
+                    "remove [gas] or the meshes")
     return errs
 
 
@@ -266,6 +308,10 @@ def cross_checks(scene: Scene) -> list[str]:
                     f"{t.center[a] - r:g}..{t.center[a] + r:g} m, the domain {dom.min[a]:g}..{dom.max[a]:g} m; "
                     "move its center or make it thinner"
                 )
+    for i, m in enumerate(scene.meshes):
+        need_material(f"meshes[{i}].material", m.material)
+    errs += tube_overlap_checks(scene)
+    errs += mesh_checks(scene)
     if scene.outlet is not None:
         o = scene.outlet
         need_material("outlet.material", o.material)

@@ -29,6 +29,17 @@ def _moving_bed_tube(scene) -> str | None:
     return _heated_tube(scene)
 
 
+def _sink(scene) -> str | None:
+    return None if scene.outlet is not None and scene.outlet.type == "sink" else \
+        "needs an [outlet] of type 'sink' (it counts the particles that leave)"
+
+
+def _heated_mesh(scene) -> str | None:
+    if scene.heat is None or not any(m.temperature is not None for m in scene.meshes):
+        return "needs [heat] and a mesh with a `temperature`"
+    return None
+
+
 def _heat_and_gas(scene) -> str | None:
     return None if scene.heat is not None and scene.gas is not None else \
         "needs a [heat] and a [gas] table (a bed heated by the gas)"
@@ -39,6 +50,8 @@ NEEDS: dict[str, Callable | None] = {
     "tube_mean_alpha": _heated_tube,
     "bed_height": None,
     "outlet_mass_flow": None,
+    "discharge_rate": _sink,
+    "wall_heat_transfer": _heated_mesh,
     "mean_temperature": _heat,
     "contact_time": None,
     "restitution": None,

@@ -117,6 +117,7 @@ class ParticleGroup(Strict):
     fixed: bool = False
     seed: int = Field(default=0, ge=0)
     coarse_grain: float = Field(default=1.0, ge=1.0, le=10.0, allow_inf_nan=False)
+    inside_mesh: int | None = Field(default=None, ge=0)
 
     @model_validator(mode="before")
     @classmethod
@@ -135,6 +136,8 @@ class ParticleGroup(Strict):
             raise ValueError("give exactly one of 'region' (fill at start), 'positions' or 'pour'")
         if self.positions is not None and self.count is not None and self.count != len(self.positions):
             raise ValueError(f"count ({self.count}) differs from the number of positions ({len(self.positions)})")
+        if self.inside_mesh is not None and self.region is None:
+            raise ValueError("'inside_mesh' limits a filled 'region' to the inside of a mesh; give 'region' too")
         if self.pour is not None and self.count is None:
             raise ValueError("a poured group needs 'count' (the number of particles to pour)")
         if self.velocities is not None:
@@ -190,10 +193,43 @@ class Tube(Strict):
         return self
 
 
+class MeshRotation(Strict):
+    """Rigid rotation of a mesh wall about an axis through `center` (right-hand rule)."""
+
+    center: Vec3
+    axis: Vec3
+    speed: Number
+
+
+class Mesh(Strict):
+    """A triangle-mesh wall read from a CAD file (STL, OBJ or PLY), two-sided. Its points are
+    placed as R_z R_y R_x (scale x) + offset, `rotate` in degrees (first about x, then y, then z)."""
+
+    file: str
+    scale: Positive = 1.0
+    rotate: Vec3 = (0.0, 0.0, 0.0)
+    offset: Vec3 = (0.0, 0.0, 0.0)
+    material: str | None = None
+    friction: NonNegative | None = None
+    temperature: Positive | None = None
+    rotation: MeshRotation | None = None
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+    surface_velocity: Vec3 = (0.0, 0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _axis(self):
+        if not self.file.strip():
+            raise ValueError("file must name a mesh file (STL, OBJ or PLY), relative to the scene file")
+        if self.rotation is not None and sum(c * c for c in self.rotation.axis) == 0:
+            raise ValueError("rotation.axis must not be the zero vector; give the direction of the rotation axis, "
+                             "e.g. [0.0, 1.0, 0.0]")
+        return self
+
+
 class Outlet(Strict):
     """How the bed leaves the domain."""
 
-    type: Literal["moving_plate", "recycle"]
+    type: Literal["moving_plate", "recycle", "sink"]
     speed: Positive | None = None
     start: NonNegative = 0.0
     height: Number | None = None
@@ -208,6 +244,8 @@ class Outlet(Strict):
             raise ValueError("a moving_plate outlet needs 'speed' (plate speed downwards, m/s)")
         if self.type == "recycle" and (self.height is None or self.reinsert_height is None):
             raise ValueError("a recycle outlet needs 'height' and 'reinsert_height'")
+        if self.type == "sink" and self.height is None:
+            raise ValueError("a sink outlet needs 'height' (particles whose centre falls below it leave the run)")
         return self
 
 
@@ -400,6 +438,7 @@ class Scene(Strict):
     particles: list[ParticleGroup] = Field(min_length=1)
     walls: list[Wall] = []
     tubes: list[Tube] = []
+    meshes: list[Mesh] = []
     outlet: Outlet | None = None
     numerics: Numerics = Numerics()
     output: Output = Output()

@@ -1,0 +1,221 @@
+"""Contacts with the analytic surfaces: plane walls (box sides, `[[walls]]`, the outlet plate) and
+tubes (infinite cylinders along x or y), with the same contact laws and wall heat transfer as every
+surface (`kernels/contact_laws.py`, `kernels/heat.py`).
+
+Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is a plane with a
+velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Their
+geometry is constant (`tidem.surfaces`), compiled into the kernel: an axis-aligned wall costs one
+subtraction, a tube no product along its axis. Wall and tube contacts keep their history in a few
+slots per particle keyed by the surface index (`wmask` has bit s set while surface s holds a slot,
+so particles away from every wall skip the search); a particle that touches more surfaces than it
+has slots is counted in `overflow[1]` (an error for the run). With `cull`, a particle skips the
+static surfaces that were out of reach at the last neighbour build (`mark_near`).
+
+With heat, a surface with a temperature conducts to a touching particle by the wall contact laws
+(`kernels/heat.py`, Schluender's gas gap, radiation), and to one within the gas lens that does not
+touch it by the lens; the heat flow is booked per surface in surf_rate and, around a tube, per angle
+bin of the contact point (omega = atan2(side, up), 0 = top, 180 deg = bottom) in tube_bin_rate; a
+heated foil's own temperature (per angle bin of a tube, one per wall) takes the place of a fixed one.
+"""
+
+from types import SimpleNamespace
+
+import taichi as ti
+
+from .heat import pfp_conductance, wall_conductance, wall_radiation
+
+
+def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, respond, hysteretic: bool, rolling: bool,
+                          s_one, heat: bool, fluid_layer: float, angle_bins: int, radiation: bool, foil: bool,
+                          wall_foil: bool, cull: int, surface_reach: float, grain_scale: float, min_image, radius_of):
+    """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
+    torque, heat_in, worst, touching)`, which adds particle i's contacts with every plane and tube to
+    the sums it is handed and returns them; `mark_near(n)` (None without `cull`). `respond`: the contact
+    law (`contact_laws.make_contact_response`); `s_one`: each surface's material-surface parameter
+    vector where all particles are of one material (constants of the kernel), else None (S.ps);
+    `min_image`, `radius_of`: `kernels/geometry.py`, `kernels/sizes.py`."""
+    n_planes = len(planes)
+    moving = [any(p["vel"]) for p in planes]
+    n_surf = n_planes + len(tubes)
+    zero3 = ti.Vector([0.0, 0.0, 0.0])
+    cg = float(grain_scale)
+    pfp = heat and fluid_layer > 0.0
+    single = s_one is not None
+
+    @ti.func
+    def lens(p, r_eff, gap, delta_f):
+        """The gas-lens conductance of a parcel's k grains (`kernels/contact.py`)."""
+        return pfp_conductance(p, r_eff, gap / cg, delta_f / cg)
+
+    @ti.func
+    def surface_params(mat_i, s: ti.template()):
+        """The material-surface parameter vector of i and surface s, as `pair_params`."""
+        if ti.static(single):
+            return ti.Vector(s_one[s])
+        else:
+            return S.ps[mat_i, s]
+
+    @ti.func
+    def along(v, w: ti.template()):
+        """v . w for a constant w, with the products by its zero components left out (the compiler may
+        not drop them itself: 0 x NaN is NaN)."""
+        out = 0.0
+        for a in ti.static(range(3)):
+            if ti.static(w[a] != 0.0):
+                out += v[a] * w[a]
+        return out
+
+    @ti.func
+    def surface_contact(i, s: ti.template(), t):
+        """Overlap, unit normal (particle -> surface) and surface velocity for surface s. The surfaces'
+        geometry is constant (`planes`, `tubes`), compiled into the kernel: an axis-aligned wall costs
+        one subtraction, a tube no product along its axis."""
+        xi = S.x[i]
+        r = radius_of(i)
+        delta = -1.0
+        n = ti.Vector([0.0, 0.0, 1.0])
+        u = zero3
+        if ti.static(s < n_planes):
+            t0, t1 = planes[s]["t"]
+            p = ti.Vector(planes[s]["p0"])
+            if ti.static(moving[s]):
+                tc = ti.min(ti.max(t, t0), t1)
+                p += ti.Vector(planes[s]["vel"]) * (tc - t0)
+                if t > t0 and t < t1:
+                    u = ti.Vector(planes[s]["vel"])
+            dist = along(xi - p, planes[s]["n"])
+            if dist > -r:
+                delta = r - dist
+                n = -ti.Vector(planes[s]["n"])
+        else:
+            d = min_image(xi - ti.Vector(tubes[s - n_planes]["c"]))
+            for a in ti.static(range(3)):
+                if ti.static(tubes[s - n_planes]["mask"][a] == 0.0):
+                    d[a] = 0.0
+            dist = d.norm()
+            if dist > 0.0:
+                delta = r + tubes[s - n_planes]["r"] - dist
+                n = -d / dist
+        return delta, n, u
+
+    @ti.func
+    def tube_bin(s: ti.template(), nrm):
+        """Angle bin of the contact point on tube s (0 for planes and without angle bins)."""
+        b = 0
+        if ti.static(angle_bins > 0 and s >= n_planes):
+            off = -nrm
+            omega = ti.atan2(off.dot(S.tube_side[s - n_planes]), off[2])
+            if omega < 0.0:
+                omega += 2.0 * 3.141592653589793
+            b = ti.min(ti.cast(omega / (2.0 * 3.141592653589793) * angle_bins, ti.i32), angle_bins - 1)
+        return b
+
+    @ti.func
+    def wall_temperature(s: ti.template(), b):
+        """The surface's fixed temperature, or a heated foil's temperature in angle bin b."""
+        t_wall = S.surf_T[s]
+        if ti.static(foil and s >= n_planes):
+            if S.tube_foil[s - n_planes][0] > 0.0:
+                t_wall = S.tube_bin_T[s - n_planes, b]
+        if ti.static(wall_foil and s < n_planes):
+            if S.plane_foil[s][0] > 0.0:
+                t_wall = S.plane_foil_T[s]
+        return t_wall
+
+    @ti.func
+    def surface_heat(s: ti.template(), b, flow):
+        """Book a particle's heat flow from surface s, and from a tube by angle bin b of the contact point."""
+        ti.atomic_add(S.surf_rate[s], flow)
+        if ti.static(angle_bins > 0 and s >= n_planes):
+            ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
+
+
+    @ti.func
+    def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching):
+        """Particle i's contacts with the planes and tubes, added to the sums handed in (module docstring)."""
+        held = S.wmask[i]  # bit s set: surface s has a history slot
+        nearby = S.near[i] if ti.static(cull) else 0
+        for s in ti.static(range(n_surf)):
+            near = 1
+            if ti.static(cull >> s & 1):
+                near = (nearby >> s) & 1  # surfaces out of reach at the last neighbour build
+            if near:
+                delta, nrm, u = surface_contact(i, s, t)
+                slot = -1
+                if (held >> s) & 1:
+                    for q in range(W):
+                        if S.wid[i, q] == s:
+                            slot = q
+                if delta > 0.0:
+                    if slot < 0:
+                        for q in range(W):
+                            if slot < 0 and S.wid[i, q] < 0:
+                                slot = q
+                                S.wid[i, q] = s
+                                held |= 1 << s
+                                S.wft[i, q] = zero3
+                                if ti.static(rolling):
+                                    S.wmr[i, q] = zero3
+                                if ti.static(hysteretic):
+                                    S.wdmax[i, q] = 0.0
+                    if slot < 0:
+                        ti.atomic_add(S.overflow[1], 1)
+                    else:
+                        v_rel = vi - u + (ri * wi).cross(nrm)
+                        dmax = 0.0
+                        if ti.static(hysteretic):
+                            dmax = S.wdmax[i, slot]
+                        mr = zero3
+                        if ti.static(rolling):
+                            mr = S.wmr[i, slot]
+                        f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                            nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
+                            surface_params(mat_i, s), S.wft[i, slot], mr, dmax, dt)
+                        force += f
+                        torque += (ri * nrm).cross(f_t) + m_roll
+                        S.wft[i, slot] = xi_new
+                        if ti.static(heat):
+                            if conduct and S.surf_T[s] > 0.0:
+                                b = tube_bin(s, nrm)
+                                t_wall = wall_temperature(s, b)
+                                flow = wall_conductance(surface_params(mat_i, s), ri, delta, cg) * (t_wall - S.T[i])
+                                if ti.static(radiation):
+                                    flow += wall_radiation(surface_params(mat_i, s), ri, t_wall, S.T[i])
+                                heat_in += flow
+                                surface_heat(s, b, flow)
+                        if ti.static(rolling):
+                            S.wmr[i, slot] = mr_new
+                        if ti.static(hysteretic):
+                            S.wdmax[i, slot] = dmax_new
+                        if diag:
+                            worst = ti.max(worst, delta / ri)
+                            touching += 1
+                else:
+                    if slot >= 0:
+                        S.wid[i, slot] = -1
+                        held &= ~(1 << s)
+                    if ti.static(pfp):
+                        if conduct and -delta < fluid_layer * ri and S.surf_T[s] > 0.0:
+                            b = tube_bin(s, nrm)
+                            flow = cg * lens(surface_params(mat_i, s), ri, -delta, fluid_layer * ri) * (
+                                wall_temperature(s, b) - S.T[i])
+                            heat_in += flow
+                            surface_heat(s, b, flow)
+        S.wmask[i] = held
+        return force, torque, heat_in, worst, touching
+
+    @ti.func
+    def mark_near_surfaces(n):
+        """near[i] bit s: static surface s is within reach of particle i (run after each neighbour
+        build, in its kernel; until the next one no particle moves more than half the skin)."""
+        for i in range(n):
+            if S.active[i]:
+                bits = 0
+                for s in ti.static(range(n_surf)):
+                    if ti.static(cull >> s & 1):
+                        delta, _n, _u = surface_contact(i, s, 0.0)
+                        if -delta < surface_reach:
+                            bits |= 1 << s
+                S.near[i] = bits
+
+    return SimpleNamespace(visit=visit, mark_near=mark_near_surfaces if cull else None, n_surf=n_surf)
