@@ -61,7 +61,7 @@ def _fields(solver) -> dict[str, Field]:
 
 def _python_state(solver) -> dict:
     meta = {"t": solver.t, "steps": solver.steps, "rebuilds": solver.rebuilds, "profile_t0": solver.profile_t0,
-            "mesh_t_build": solver.mesh_t_build}
+            "mesh_t_build": solver.mesh_t_build, "mesh_t_binned": solver.mesh_t_binned}
     if solver.gas is not None:
         g = solver.gas
         meta["gas"] = {k: getattr(g, k) for k in ("steps", "iterations", "residual", "divergence", "inlet_scale")}
@@ -128,7 +128,8 @@ def changed_keys(before: dict, after: dict, prefix: str = "") -> list[str]:
 
 def check_scene(meta: dict, scene_raw: dict, precision: str) -> None:
     """Refuse to resume with a scene that differs from the checkpoint's outside RESUMABLE_KEYS."""
-    bad = [k for k in changed_keys(meta["scene"], scene_raw) if not k.startswith(RESUMABLE_KEYS)]
+    bad = [k for k in changed_keys(meta["scene"], scene_raw)
+           if not (k + ".").startswith(RESUMABLE_KEYS)]  # "render" itself: a [render] table added or dropped
     if bad:
         raise CheckpointError(
             f"the scene differs from the one the checkpoint was made with in {', '.join(bad)}; only output, render, "
@@ -153,7 +154,8 @@ def restore(solver, meta: dict, arrays: dict) -> None:
     solver.state.nbr_gap.fill(0.0)  # no quiet partner skipped until the next neighbour build
     s = meta["solver"]
     solver.t, solver.steps, solver.rebuilds, solver.profile_t0 = s["t"], s["steps"], s["rebuilds"], s["profile_t0"]
-    solver.mesh_t_build = s.get("mesh_t_build", 0.0)  # when the moving meshes were last binned
+    solver.mesh_t_build = s.get("mesh_t_build", 0.0)  # the last neighbour build, for the moving meshes
+    solver.mesh_t_binned = s.get("mesh_t_binned", 0.0)  # when the moving meshes were last binned
     if solver.gas is not None:
         for k, v in s["gas"].items():
             setattr(solver.gas, k, v)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-MESH_CANDIDATES = 16  # triangles listed per particle at a neighbour build (kernels/mesh_contact.py)
+MIN_CANDIDATES, MAX_CANDIDATES = 16, 128  # triangles listed per particle at a neighbour build (`candidate_slots`)
 MESH_SLOTS = 4  # mesh contacts a particle can hold at once, each with its history
 
 
@@ -28,8 +28,10 @@ class MeshTable:
     mesh_id: np.ndarray  # [T] int32
     start: np.ndarray  # [cells + 1] int32, CSR starts of the bins
     tri: np.ndarray  # [entries] int32, triangle ids by cell
-    inflate: float  # how far from a cell its triangles are listed [m]
+    inflate: float  # how far from a cell its triangles are listed [m], the moving meshes' `margin` included
+    margin: float  # how far a moving mesh may move before it is binned anew [m] (0: none moves)
     bin_capacity: int  # room for the bins of a moving mesh, rebinned as it moves
+    candidates: int  # triangles a particle can list (`candidate_slots`)
 
     def at(self, meshes, t: float) -> np.ndarray:
         """The triangles [T, 3, 3] at time t, image shifts included."""
@@ -41,13 +43,28 @@ class MeshTable:
         return out
 
 
-def mesh_table(meshes, grid, inflate: float) -> MeshTable:
-    """Triangles with their periodic images (within `inflate` of a periodic end) and their bins."""
-    rest, shift, mesh_id = triangle_table(meshes, grid, inflate)
-    start, tri = bin_triangles(rest + shift[:, None, :], grid, inflate)
+def mesh_table(meshes, grid, reach: float, margin: float) -> MeshTable:
+    """Triangles with their periodic images (within `reach` of a periodic end) and their bins, listed
+    within reach + `margin` of each cell where a mesh moves (it is binned anew only after moving that
+    far, `tidem.solver`); `reach`: the largest radius plus the candidates' reach."""
     moving = any(m.moving for m in meshes)
+    margin = margin if moving else 0.0
+    rest, shift, mesh_id = triangle_table(meshes, grid, reach + margin)
+    start, tri = bin_triangles(rest + shift[:, None, :], grid, reach + margin)
     capacity = max(2 * len(tri), len(tri) + 4096) if moving else max(len(tri), 1)
-    return MeshTable(rest, shift, mesh_id, start, tri, inflate, capacity)
+    return MeshTable(rest, shift, mesh_id, start, tri, reach + margin, margin, capacity, candidate_slots(rest, reach))
+
+
+def candidate_slots(tri: np.ndarray, reach: float) -> int:
+    """Room for the triangles within `reach` of a particle's centre: 1.5 times as many as a disc of
+    radius reach plus a triangle's size holds of the finer triangles (the 10th percentile of their
+    areas), between MIN_CANDIDATES and MAX_CANDIDATES (a particle with more counts in overflow[3])."""
+    if not len(tri):
+        return MIN_CANDIDATES
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    fine = float(np.percentile(area, 10))
+    need = 1.5 * np.pi * (reach + np.sqrt(2.0 * fine)) ** 2 / fine
+    return int(min(max(np.ceil(need), MIN_CANDIDATES), MAX_CANDIDATES))
 
 
 def triangle_table(meshes, grid, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -123,7 +140,7 @@ def mesh_field_bytes(model) -> int:
         return 0
     fb = f.float_bytes
     slot = 4 + 6 * fb + (3 * fb if f.rolling else 0) + (fb if f.hysteretic else 0)
-    per_particle = 4 + 4 * MESH_CANDIDATES + MESH_SLOTS * slot
+    per_particle = 4 + 4 * tab.candidates + MESH_SLOTS * slot
     tri = len(tab.mesh_id) * (9 * fb + 4 + (12 * fb if f.moving_meshes else 0))
     bins = 4 * (model.grid.n_cells + 1) + 4 * tab.bin_capacity
     return per_particle * model.capacity + tri + bins + 12 * fb * len(model.meshes)

@@ -11,6 +11,7 @@ plus the surface velocity projected onto the tangent plane at a contact.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,6 +34,7 @@ class MeshWall:
     surface_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)  # belt velocity [m/s]
     source: str = ""  # the file it was read from
     stats: dict = field(default_factory=dict)  # what `tidem check` reports (welded vertices, dropped triangles, sag)
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def moving(self) -> bool:
@@ -56,19 +58,22 @@ class MeshWall:
         return float(np.linalg.norm(self.velocity)) + abs(self.speed) * self.reach_from_axis()
 
     def reach_from_axis(self) -> float:
-        """Largest distance of a vertex from the rotation axis [m] (0 without rotation)."""
-        if self.speed == 0.0:
-            return 0.0
-        a = np.asarray(self.axis, float)
-        d = self.vertices - np.asarray(self.center, float)
-        return float(np.sqrt(np.max(np.sum(np.cross(d, a) ** 2, axis=1)))) if len(d) else 0.0
+        """Largest distance of a vertex from the rotation axis [m] (0 without rotation); kept after
+        the first call (the run asks every step)."""
+        if "reach" not in self._cache:
+            a = np.asarray(self.axis, float)
+            d = self.vertices - np.asarray(self.center, float)
+            far = float(np.sqrt(np.max(np.sum(np.cross(d, a) ** 2, axis=1)))) if len(d) else 0.0
+            self._cache["reach"] = far if self.speed != 0.0 else 0.0
+            self._cache["drift"] = float(np.linalg.norm(self.velocity))
+        return self._cache["reach"]
 
     def displacement_bound(self, t0: float, t1: float) -> float:
         """An upper bound of how far any point of the mesh moves between t0 and t1 [m]: the chord
         2 R sin(omega dt / 2) of the farthest vertex plus the translation."""
         dt = abs(t1 - t0)
-        chord = 2.0 * self.reach_from_axis() * abs(np.sin(min(0.5 * self.speed * dt, 0.5 * np.pi)))
-        return chord + float(np.linalg.norm(self.velocity)) * dt
+        chord = 2.0 * self.reach_from_axis() * abs(math.sin(min(0.5 * self.speed * dt, 0.5 * math.pi)))
+        return chord + self._cache["drift"] * dt
 
 
 STEP_SHARE = 0.2  # the most a particle may close on a mesh in one step, as a share of the smallest radius

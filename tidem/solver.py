@@ -33,7 +33,7 @@ from tidem.kernels.integrate import make_integrators
 from tidem.kernels.mesh_contact import make_mesh_mover
 from tidem.kernels.outlet import make_recycle_kernel, make_sink_kernel
 from tidem.gas import GasError, GasPhase
-from tidem.mesh_bins import MESH_CANDIDATES, MESH_SLOTS, bin_triangles
+from tidem.mesh_bins import MESH_SLOTS, bin_triangles
 from tidem.model import Model
 from tidem.phases import PhaseTimer, clock
 from tidem.pour import Pourer
@@ -69,7 +69,8 @@ def mesh_settings(model: Model) -> tuple[int, int, int, float] | None:
     g = model.grid
     largest = max(max(abs(lo), abs(lo + L)) for lo, L in zip(g.lo, g.length))
     eps = np.finfo(np.float32 if model.features.float_bytes == 4 else np.float64).eps
-    return model.features.n_meshes, MESH_CANDIDATES, MESH_SLOTS, 1e-6 * float(model.radius.min()) + 64 * eps * largest
+    return (model.features.n_meshes, model.mesh_table.candidates, MESH_SLOTS,
+            1e-6 * float(model.radius.min()) + 64 * eps * largest)
 
 
 def static_surfaces(model: Model) -> int:
@@ -103,7 +104,8 @@ class Solver:
         self._energies = make_energy_kernel(model.gravity, self.state)
         self._build_sources_and_sinks()
         self._move_meshes = None
-        self.mesh_t_build = 0.0  # time of the last binning of the moving meshes (`rebuild`)
+        self.mesh_t_build = 0.0  # time of the last neighbour build, as the moving meshes' candidates see it
+        self.mesh_t_binned = 0.0  # time the moving meshes were last binned (`rebuild`)
         if f.moving_meshes:
             self._move_meshes = hot(make_mesh_mover(self.state, [
                 (m.moving, m.center, m.axis, m.speed, m.velocity) for m in model.meshes]))
@@ -274,9 +276,11 @@ class Solver:
         """Add the particles now to the time-averaged fields of [averaging] (`tidem.averaging`)."""
         self._average(self.n)
 
-    def _meshes_moved(self) -> float:
-        """How far the moving meshes may have moved since they were last binned [m] (a bound)."""
-        return max(m.displacement_bound(self.mesh_t_build, self.t) for m in self.model.meshes)
+    def _meshes_moved(self, since: float | None = None) -> float:
+        """How far the moving meshes may have moved since the last neighbour build (or since time
+        `since`) [m], a bound."""
+        t0 = self.mesh_t_build if since is None else since
+        return max(m.displacement_bound(t0, self.t) for m in self.model.meshes)
 
     def rebuild(self) -> None:
         """Neighbour list (none with contact.model = 'none'); every numerics.sort_interval
@@ -284,11 +288,13 @@ class Solver:
         meshes are binned anew where they are now (`tidem.mesh_bins`)."""
         if self._move_meshes is not None:
             tab = self.model.mesh_table
-            start, tri = bin_triangles(tab.at(self.model.meshes, self.t), self.model.grid, tab.inflate)
-            if len(tri) > tab.bin_capacity:
-                raise RunError(f"mesh bins overflow: the moving meshes' triangles fill {len(tri)} cell entries, room "
-                               f"for {tab.bin_capacity}; coarsen the mesh or lower numerics.skin")
-            load_bins(self.state, start, tri)
+            if self._meshes_moved(self.mesh_t_binned) > tab.margin - 0.5 * self.model.skin:
+                start, tri = bin_triangles(tab.at(self.model.meshes, self.t), self.model.grid, tab.inflate)
+                if len(tri) > tab.bin_capacity:
+                    raise RunError(f"mesh bins overflow: the moving meshes' triangles fill {len(tri)} cell entries, "
+                                   f"room for {tab.bin_capacity}; coarsen the mesh or lower numerics.skin")
+                load_bins(self.state, start, tri)
+                self.mesh_t_binned = self.t
             self.mesh_t_build = self.t
         if self._rebuild is not None:
             if self._sort_every and self.rebuilds % self._sort_every == 0:
@@ -317,7 +323,7 @@ class Solver:
         if over[3] > 0:
             raise RunError(
                 f"mesh contact overflow: a particle has {over[3]} mesh triangles within reach, room for "
-                f"{MESH_CANDIDATES}; coarsen the mesh near the particles or lower numerics.skin")
+                f"{self.model.mesh_table.candidates}; coarsen the mesh near the particles or lower numerics.skin")
         if over[2] > 0:
             raise RunError(
                 f"neighbour list: {over[2]} contacts that changed owner at a rebuild lost their history (more than "

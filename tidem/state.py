@@ -62,7 +62,7 @@ import taichi as ti
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.averaging import channels
 from tidem.kernels.geometry import slab_layout
-from tidem.mesh_bins import MESH_CANDIDATES, MESH_SLOTS
+from tidem.mesh_bins import MESH_SLOTS
 from tidem.model import Model
 from tidem.reactions import N_SUMS
 from tidem.surfaces import angle_bin_area
@@ -212,7 +212,7 @@ def _place_mesh_fields(p: _Placer, model: Model) -> None:
     p.place((tab.bin_capacity,), "mbin_tri", ti.i32)
     p.place((len(model.meshes), 4), "mesh_motion", n=3)
     p.per_particle((N,), "mc_n", ti.i32)
-    p.per_particle((N, MESH_CANDIDATES), "mc_tri", ti.i32)
+    p.per_particle((N, tab.candidates), "mc_tri", ti.i32)
     p.per_particle((N, MESH_SLOTS), "mh_id", ti.i32)
     for name in ("mh_n", "mh_ft"):
         p.per_particle((N, MESH_SLOTS), name, n=3)
