@@ -3,12 +3,12 @@
 and with mesh walls (`kernels/mesh_contact.py`), and gravity.
 
 Each pair is listed once, in the row of its owner (`kernels/broadphase.py`), and evaluated there,
-the partner receiving the reaction. Particles are swept slab by slab (`kernels/geometry.py`): a pair's partner lies in the
-owner's slab or in the next one. The slabs are grouped into blocks of consecutive slabs
+the partner receiving the reaction. Particles are swept slab by slab (`kernels/geometry.py`): a
+pair's partner lies in the owner's slab or in the next one. The slabs are grouped into blocks of consecutive slabs
 (`block_count`: an even number of blocks, at most 16, each of two slabs or more; one block below
 four slabs), so (`passes`)
 1. pass 1: each block, one thread per block, sweeps its slabs but the last in order, each in index
-   order (its pairs, walls and tubes), adding to the sums of that slab and the next, which the last
+   order (its pairs, walls, tubes and meshes), adding to the sums of that slab and the next, which the last
    kick-drift zeroed (`kernels/integrate.py`; and the contact counts, where the host reads them,
    here); when the step goes on, it integrates (`then`) each slab after the block's first as soon as
    it is swept: its sums are complete (each slab receives only from itself and the one before), and
@@ -24,8 +24,8 @@ only): float64 runs are bit-reproducible without atomics. Each particle is read 
 about once per step, which is what the large beds, whose fields do not fit in cache, wait on. With
 `atomic` (a GPU, where a slab per thread would leave it idle) every particle of a pass is a thread
 of its own and the sums are atomic: the same forces, summed in an order that varies from run to run.
-With heat the same pair evaluation adds its conduction (contact spot and gas lens) to both
-particles' heat flows.
+With heat the same evaluation adds the conduction (contact spot and gas lens) to the particles'
+heat flows and to the heated surfaces' (`surf_rate`, atomic: a few sums all threads share).
 
 Quiet partners (`kernels/pair_contact.py`): while no pair listed apart at the last build can have
 closed, the pass evaluates only the partners that touched then; this changes no bit.

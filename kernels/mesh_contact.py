@@ -97,9 +97,10 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
     """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
     torque, heat_in, worst, touching)`, which adds particle i's contacts with every mesh to the sums
     handed in (force, torque, heat flow into i [W], largest overlap / r_i, contacts) and returns them;
-    `list_candidates(n)` (the broad phase, run by the neighbour build); `move(t)`, a kernel that puts
-    the moving meshes' triangles where they are at time t (None unless a mesh moves). `n_surf`: planes
-    and tubes before the meshes in the surface tables (S.ps, surf_T, surf_rate); `grid_funcs`:
+    `list_candidates(n)` (the broad phase, run by the neighbour build). `n_surf`: planes and tubes
+    before the meshes in the surface tables (S.ps, surf_T, surf_rate); `M`, `WM`: candidates and
+    contact slots per particle; `reach`: how far beyond its radius a particle lists triangles (skin
+    and gas lens); `on_tol`: the distance within which a point lies on a triangle; `grid_funcs`:
     (cell_coord, cell_id) of the neighbour grid; `radius_of`: `kernels/sizes.py`."""
     respond = make_contact_response(law, rolling)
     hysteretic = law == 2
@@ -111,6 +112,7 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
 
     @ti.func
     def triangle(k):
+        """The vertices of triangle k now."""
         return S.tri_v[k, 0], S.tri_v[k, 1], S.tri_v[k, 2]
 
     @ti.func
@@ -121,19 +123,19 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
         return p, feature, (p - x).norm_sqr()
 
     @ti.func
-    def suppressed(i, q, x, p, feature, d2, cnt, r):
+    def suppressed(i, q, p, feature, d2, cnt, r, d2s, features):
         """Whether contact q of particle i (closest point p, `feature`, squared distance d2) repeats another:
         p lies on another listed triangle, which is then at least as close; the closer one stays, and of
-        two as close (within 2 on_tol r of d2: the compiler may round a distance differently where it is
-        computed again) the one of the smaller feature number, then the one listed first (module docstring)."""
+        two as close (within 2 on_tol r of d2: two triangles may round one point differently) the one of
+        the smaller feature number, then the one listed first (module docstring). `d2s`, `features`: the
+        listed triangles' squared distances and features, from `visit`."""
         drop = False
         tie = 2.0 * on_tol * r
         for o in range(cnt):
             if not drop and o != q:
-                k = S.mc_tri[i, o]
-                _po, f_o, d2_o = nearest(x, k)
+                d2_o, f_o = d2s[o], features[o]
                 if d2_o < d2 - tie or (d2_o <= d2 + tie and (f_o < feature or (f_o == feature and o < q))):
-                    _pp, _f, e2 = nearest(p, k)
+                    _pp, _f, e2 = nearest(p, S.mc_tri[i, o])
                     drop = e2 < tol2
         return drop
 
@@ -177,11 +179,21 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
         if ti.static(pfp):
             near = ri * (1.0 + fluid_layer)
         near2 = near * near
+        d2s = ti.Vector([0.0] * M)  # each listed triangle's squared distance and feature, for `suppressed`
+        features = ti.Vector([0] * M)
+        hits = 0
+        for q in range(cnt):
+            _p, f_q, d2_q = nearest(xi, S.mc_tri[i, q])
+            features[q] = f_q
+            d2s[q] = d2_q
+            if d2_q < near2:
+                hits += 1
         for q in range(cnt):
             k = S.mc_tri[i, q]
-            p, feature, d2 = nearest(xi, k)
+            feature, d2 = features[q], d2s[q]
             if d2 < near2:
-                if not suppressed(i, q, xi, p, feature, d2, cnt, ri):
+                p, _f, _d2 = nearest(xi, k)
+                if hits == 1 or not suppressed(i, q, p, feature, d2, cnt, ri, d2s, features):
                     m = S.tri_mesh[k]
                     nrm = zero3
                     dist = 0.0

@@ -222,3 +222,23 @@ def test_heated_mesh_plate_passes_the_heat_of_the_heated_plane(solver_for, tmp_p
     q_wall = wall.heat_summary()["box_z-_heat_J"]
     q_mesh = mesh.heat_summary()["meshes0_heat_J"]
     assert q_mesh == pytest.approx(q_wall, rel=1e-9)
+
+
+def test_sphere_set_on_a_belt_ends_rolling_at_two_sevenths_of_its_speed(solver_for, tmp_path):
+    """A still mesh with a surface velocity U (a belt) drags a sphere set on it at rest until it rolls
+    without slip: m v = J, I w = J r, v + w r = U give v = 2 U / 7."""
+    path, _ = irregular_square(tmp_path / "belt.stl", 0.1, n=9)
+    belt, r = 0.2, 0.01
+    mat = {**SOFT, "friction": 0.5, "rolling_friction": 0.0, "restitution": 0.3}
+    m = 2500 * 4 / 3 * math.pi * r**3
+    sink = m * 9.81 / (5e6 * 2 * r)
+    raw = make_scene(domain={"min": [-0.1, -0.1, -0.02], "max": [0.1, 0.1, 0.1], "gravity": [0.0, 0.0, -9.81]},
+                     materials={"soft": mat},
+                     particles=[{"name": "p", "material": "soft", "diameter": 2 * r, "positions": [[-0.05, 0.0, r - sink]]}],
+                     numerics={"precision": "float64", "t_end": 1.0},
+                     meshes=[{"file": path, "surface_velocity": [belt, 0.0, 0.0]}])
+    s = solver_for(raw)
+    s.advance(int(0.2 / s.dt))
+    v, w = s.state.v[0].to_numpy(), s.state.w[0].to_numpy()
+    assert v[0] == pytest.approx(2 * belt / 7, rel=0.01)
+    assert v[0] - w[1] * r == pytest.approx(belt, rel=0.01)  # the contact point moves with the belt
