@@ -150,8 +150,10 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
 
     @ti.func
     def slot_for(i, m, nrm, used):
-        """The history slot of contact (mesh m, normal nrm): the unused slot of mesh m whose normal is
-        closest (cosine above MATCH), else a free one with zeroed history; -1 if none is left."""
+        """The history slot of contact (mesh m, normal nrm): the slot of mesh m not yet used this step
+        whose normal is closest (cosine above MATCH), else a free one, else one that no contact has
+        used this step (a contact of the last step that has ended, or that this step has yet to
+        reach), with zeroed history; -1 if every slot holds a contact of this step."""
         best = -1
         best_cos = MATCH
         for q in range(WM):
@@ -163,99 +165,105 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
             for q in range(WM):
                 if best < 0 and not (used >> q) & 1 and S.mh_id[i, q] < 0:
                     best = q
-                    S.mh_id[i, q] = m
-                    S.mh_ft[i, q] = zero3
-                    if ti.static(rolling):
-                        S.mh_mr[i, q] = zero3
-                    if ti.static(hysteretic):
-                        S.mh_dmax[i, q] = 0.0
+            for q in range(WM):
+                if best < 0 and not (used >> q) & 1:
+                    best = q
+            if best >= 0:
+                S.mh_id[i, best] = m
+                S.mh_ft[i, best] = zero3
+                if ti.static(rolling):
+                    S.mh_mr[i, best] = zero3
+                if ti.static(hysteretic):
+                    S.mh_dmax[i, best] = 0.0
         return best
 
     @ti.func
     def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching):
+        """Particle i's mesh contacts (and gas-lens conduction to heated meshes), added to the sums."""
         used = 0  # bit q: slot q holds a contact of this step
         cnt = S.mc_n[i]
-        near = ri
-        if ti.static(pfp):
-            near = ri * (1.0 + fluid_layer)
-        near2 = near * near
-        d2s = ti.Vector([0.0] * M)  # each listed triangle's squared distance and feature, for `suppressed`
-        features = ti.Vector([0] * M)
-        hits = 0
-        for q in range(cnt):
-            _p, f_q, d2_q = nearest(xi, S.mc_tri[i, q])
-            features[q] = f_q
-            d2s[q] = d2_q
-            if d2_q < near2:
-                hits += 1
-        for q in range(cnt):
-            k = S.mc_tri[i, q]
-            feature, d2 = features[q], d2s[q]
-            if d2 < near2:
-                p, _f, _d2 = nearest(xi, k)
-                if hits == 1 or not suppressed(i, q, p, feature, d2, cnt, ri, d2s, features):
-                    m = S.tri_mesh[k]
-                    nrm = zero3
-                    dist = 0.0
-                    if feature == FACE:
-                        a, b, c = triangle(k)
-                        face = (b - a).cross(c - a).normalized()
-                        side = (xi - a).dot(face)
-                        dist = ti.abs(side)
-                        nrm = -face
-                        if side < 0.0:
-                            nrm = face
-                    else:
-                        dist = ti.sqrt(d2)
-                        nrm = (p - xi) / dist
-                    delta = ri - dist
-                    s = n_surf + m
-                    params = S.ps[mat_i, s]
-                    if delta > 0.0:
-                        slot = slot_for(i, m, nrm, used)
-                        if slot < 0:
-                            ti.atomic_add(S.overflow[1], 1)
+        if cnt > 0:  # (a particle with no triangle in reach holds no slot: `list_candidates`)
+            near = ri
+            if ti.static(pfp):
+                near = ri * (1.0 + fluid_layer)
+            near2 = near * near
+            d2s = ti.Vector([0.0] * M)  # each listed triangle's squared distance and feature, for `suppressed`
+            features = ti.Vector([0] * M)
+            hits = 0
+            for q in range(cnt):
+                _p, f_q, d2_q = nearest(xi, S.mc_tri[i, q])
+                features[q] = f_q
+                d2s[q] = d2_q
+                if d2_q < near2:
+                    hits += 1
+            for q in range(cnt):
+                k = S.mc_tri[i, q]
+                feature, d2 = features[q], d2s[q]
+                if d2 < near2:
+                    p, _f, _d2 = nearest(xi, k)
+                    if hits == 1 or not suppressed(i, q, p, feature, d2, cnt, ri, d2s, features):
+                        m = S.tri_mesh[k]
+                        nrm = zero3
+                        dist = 0.0
+                        if feature == FACE:
+                            a, b, c = triangle(k)
+                            face = (b - a).cross(c - a).normalized()
+                            side = (xi - a).dot(face)
+                            dist = ti.abs(side)
+                            nrm = -face
+                            if side < 0.0:
+                                nrm = face
                         else:
-                            used |= 1 << slot
-                            S.mh_n[i, slot] = nrm
-                            u = wall_velocity(m, xi + dist * nrm, nrm, t)
-                            v_rel = vi - u + (ri * wi).cross(nrm)
-                            dmax = 0.0
-                            if ti.static(hysteretic):
-                                dmax = S.mh_dmax[i, slot]
-                            mr = zero3
-                            if ti.static(rolling):
-                                mr = S.mh_mr[i, slot]
-                            f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                                nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri, params,
-                                S.mh_ft[i, slot], mr, dmax, dt)
-                            force += f
-                            torque += (ri * nrm).cross(f_t) + m_roll
-                            S.mh_ft[i, slot] = xi_new
-                            if ti.static(rolling):
-                                S.mh_mr[i, slot] = mr_new
-                            if ti.static(hysteretic):
-                                S.mh_dmax[i, slot] = dmax_new
-                            if ti.static(heat):
+                            dist = ti.sqrt(d2)
+                            nrm = (p - xi) / dist
+                        delta = ri - dist
+                        s = n_surf + m
+                        params = S.ps[mat_i, s]
+                        if delta > 0.0:
+                            slot = slot_for(i, m, nrm, used)
+                            if slot < 0:
+                                ti.atomic_add(S.overflow[1], 1)
+                            else:
+                                used |= 1 << slot
+                                S.mh_n[i, slot] = nrm
+                                u = wall_velocity(m, xi + dist * nrm, nrm, t)
+                                v_rel = vi - u + (ri * wi).cross(nrm)
+                                dmax = 0.0
+                                if ti.static(hysteretic):
+                                    dmax = S.mh_dmax[i, slot]
+                                mr = zero3
+                                if ti.static(rolling):
+                                    mr = S.mh_mr[i, slot]
+                                f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                                    nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri, params,
+                                    S.mh_ft[i, slot], mr, dmax, dt)
+                                force += f
+                                torque += (ri * nrm).cross(f_t) + m_roll
+                                S.mh_ft[i, slot] = xi_new
+                                if ti.static(rolling):
+                                    S.mh_mr[i, slot] = mr_new
+                                if ti.static(hysteretic):
+                                    S.mh_dmax[i, slot] = dmax_new
+                                if ti.static(heat):
+                                    if conduct and S.surf_T[s] > 0.0:
+                                        flow = wall_conductance(params, ri, delta, cg) * (S.surf_T[s] - S.T[i])
+                                        if ti.static(radiation):
+                                            flow += wall_radiation(params, ri, S.surf_T[s], S.T[i])
+                                        heat_in += flow
+                                        ti.atomic_add(S.surf_rate[s], flow)
+                                if diag:
+                                    worst = ti.max(worst, delta / ri)
+                                    touching += 1
+                        else:
+                            if ti.static(pfp):
                                 if conduct and S.surf_T[s] > 0.0:
-                                    flow = wall_conductance(params, ri, delta, cg) * (S.surf_T[s] - S.T[i])
-                                    if ti.static(radiation):
-                                        flow += wall_radiation(params, ri, S.surf_T[s], S.T[i])
+                                    flow = cg * pfp_conductance(params, ri, -delta / cg, fluid_layer * ri / cg) * (
+                                        S.surf_T[s] - S.T[i])
                                     heat_in += flow
                                     ti.atomic_add(S.surf_rate[s], flow)
-                            if diag:
-                                worst = ti.max(worst, delta / ri)
-                                touching += 1
-                    else:
-                        if ti.static(pfp):
-                            if conduct and S.surf_T[s] > 0.0:
-                                flow = cg * pfp_conductance(params, ri, -delta / cg, fluid_layer * ri / cg) * (
-                                    S.surf_T[s] - S.T[i])
-                                heat_in += flow
-                                ti.atomic_add(S.surf_rate[s], flow)
-        for q in range(WM):
-            if not (used >> q) & 1:
-                S.mh_id[i, q] = -1
+            for q in range(WM):
+                if not (used >> q) & 1:
+                    S.mh_id[i, q] = -1
         return force, torque, heat_in, worst, touching
 
     @ti.func
@@ -277,6 +285,9 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
                 if cnt > M:
                     ti.atomic_max(S.overflow[3], cnt)
                 S.mc_n[i] = ti.min(cnt, M)
+                if cnt == 0:  # out of every mesh's reach until the next build: no contact holds a slot
+                    for q in range(WM):
+                        S.mh_id[i, q] = -1
 
     return SimpleNamespace(visit=visit, list_candidates=list_candidates)
 

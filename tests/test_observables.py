@@ -98,10 +98,11 @@ def test_every_listed_name_has_a_compute_function():
 
 
 def test_discharge_rate_is_the_slope_of_the_steady_window():
-    """A bin that starts at 0.1 s and drains at 2 kg/s until 1 s: the rate is 2 in both halves of the
-    window; a rate that grows with time (m = t^2) shows in the halves."""
+    """A bin that starts draining at 0.1 s at 2 kg/s until 1 s (empty), after a surge in the first
+    quarter: the rate is 2 in both halves of the window; a rate that grows with time (m = t^2) shows
+    in the halves."""
     t = np.linspace(0.0, 1.2, 121)
-    steady = np.clip(2.0 * (t - 0.1), 0.0, 1.8)
+    steady = np.clip(2.0 * (t - 0.1), 0.0, 1.8) + np.clip(0.5 * t, 0.0, 0.1)  # the surge ends at 0.2 s
     rec = obs.RunRecord(time_s=1.2, x=np.zeros((0, 3)), v=np.zeros((0, 3)), mass=np.zeros(0), radius=np.zeros(0),
                         v0=np.zeros((0, 3)), floor_z=0.0, series={"time_s": t, "discharged_mass_kg": steady})
     got = obs.discharge_rate(rec)

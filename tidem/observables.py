@@ -172,15 +172,16 @@ def outlet_mass_flow(rec: RunRecord) -> dict[str, float]:
 @observable("discharge_rate")
 def discharge_rate(rec: RunRecord) -> dict[str, float]:
     """Discharge rate of a sink outlet [kg/s] (`discharge_rate_kg_s`): the least-squares slope of
-    the discharged mass over time while it lies between 10 % and 70 % of the mass discharged by the
-    end (after the flow has set in, before a bin runs low), and the same over the first and the
-    second half of that window (`discharge_rate_early_kg_s`, `discharge_rate_late_kg_s`: equal in a
-    flow independent of the fill height, as Beverloo's). NaN with fewer than four samples there."""
+    the discharged mass over time after the first quarter of the run (a fill has settled, the flow
+    set in) while less than 70 % of the mass discharged by the end has left (before a bin runs low),
+    and the same over the first and the second half of that window (`discharge_rate_early_kg_s`,
+    `discharge_rate_late_kg_s`: equal in a flow independent of the fill height, as Beverloo's). NaN
+    with fewer than four samples there."""
     t, m = rec.series.get("time_s"), rec.series.get("discharged_mass_kg")
     out = {k: float("nan") for k in ("discharge_rate_kg_s", "discharge_rate_early_kg_s", "discharge_rate_late_kg_s")}
     if t is None or m is None or len(m) == 0 or m[-1] <= 0.0:
         return out
-    pick = (m >= 0.1 * m[-1]) & (m <= 0.7 * m[-1])
+    pick = (t >= 0.25 * t[-1]) & (m <= 0.7 * m[-1])
     t, m = t[pick], m[pick]
     if len(t) < 4:
         return out
