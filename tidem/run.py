@@ -29,6 +29,7 @@ from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
 from tidem.reactions import reaction_summary
 from tidem.render.settings import render_settings
+from tidem.run_tables import alpha_profile
 from tidem.solver import RunError, Solver
 
 
@@ -138,7 +139,7 @@ class Output:
 
     def write_alpha_profile(self, solver: Solver) -> None:
         """alpha_profile.csv: tube, angle_deg (0 = top), alpha_W_m2K."""
-        rows, _ = obs.alpha_profile(self.model, solver)
+        rows, _ = alpha_profile(self.model, solver)
         if rows:
             lines = ["tube,angle_deg,alpha_W_m2K"] + [f"{r['tube']},{r['angle_deg']:.2f},{r['alpha_W_m2K']:.6g}" for r in rows]
             (self.dir / "alpha_profile.csv").write_text("\n".join(lines) + "\n")
