@@ -4,7 +4,6 @@ mesh walls settles the same bed as the box's analytic walls (packing and height 
 of three seeds)."""
 
 import numpy as np
-import pytest
 import pyvista as pv
 
 from tests.conftest import make_scene
