@@ -36,6 +36,11 @@ class MeshWall:
     stats: dict = field(default_factory=dict)  # what `tidem check` reports (welded vertices, dropped triangles, sag)
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
+    def surface(self) -> dict:
+        """The mesh as a surface of the material-surface tables and heat summaries (as `tidem.surfaces`'
+        planes and tubes): name, material, friction override, fixed temperature."""
+        return dict(name=self.name, material=self.material, friction=self.friction, T=self.temperature)
+
     @property
     def moving(self) -> bool:
         return self.speed != 0.0 or any(self.velocity)

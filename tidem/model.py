@@ -153,8 +153,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     errors = errors or tube_mesh_overlaps(scene, meshes)
     if errors:
         raise SceneError(src, errors)
-    walls = planes + tubes + [dict(name=m.name, material=m.material, friction=m.friction, T=m.temperature)
-                              for m in meshes]  # every surface, for the tables and the step limits
+    walls = planes + tubes + [m.surface() for m in meshes]  # every surface, for the tables and the step limits
     periodic = tuple(AXES[a] in dom.periodic for a in range(3))
     lengths = [dom.max[a] - dom.min[a] for a in range(3)]
     placed, errors = place_groups(scene, planes, tubes, lengths, periodic, meshes)

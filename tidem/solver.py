@@ -371,7 +371,7 @@ class Solver:
         n_planes = len(self.model.planes)
         foil_T = list(S.plane_foil_T.to_numpy() if f.wall_foil else [None] * n_planes)
         foil_T += list(S.tube_bin_T.to_numpy().mean(axis=1) if f.foil else [None] * len(self.model.tubes))
-        meshes = [dict(name=m.name, T=m.temperature) for m in self.model.meshes]
+        meshes = [m.surface() for m in self.model.meshes]
         for s, surf in enumerate(self.model.planes + self.model.tubes + meshes):
             if is_heated(surf):
                 key = surf["name"].replace(" ", "_").replace("[", "").replace("]", "")
