@@ -1,7 +1,8 @@
 """Particle <-> gas exchange: voidage, drag, pressure-gradient force, heat exchange.
 
 At each gas step (every `coupling_interval` DEM steps):
-  deposit_volume: eps_c = 1 - sum_p w_pc V_p / V_cell (cloud-in-cell, `gas_grid.make_cic`),
+  deposit_volume: eps_c = 1 - sum_p w_pc V_p / (f_c V_cell) (cloud-in-cell, `gas_grid.make_cic`;
+                  f_c the open fraction of a cell a mesh cuts, `tidem.gas_mesh`, else 1),
                   clipped below at `min_voidage`.
   couple:         per particle, eps_p and u_p interpolated with the same weights; the drag
                   coefficient K_p (`drag.make_drag`) and heat conductance H_p = h_p pi d^2
@@ -35,7 +36,7 @@ from .ordered import in_order
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
                           species: bool = False, tracer_dt: float = 0.0, t_in: float = 0.0,
-                          coarse_grain: bool = False):
+                          coarse_grain: bool = False, cut_cells: bool = False):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
     particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
@@ -47,7 +48,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     times k^3 (K_p = k^3 K(eps, d_p/k, w), H_p = k^3 h(d_p/k) pi (d_p/k)^2; the per-grain
     closures of MFiX's CGDEM and CFDEM's coarse-grained models), which keeps the grains'
     terminal velocity, drag relaxation time and lumped heating time; the pressure-gradient
-    force and the voidage take the parcel's volume, k^3 grains' volume."""
+    force and the voidage take the parcel's volume, k^3 grains' volume. With `cut_cells` (meshes in
+    the gas) the voidage is taken over each cell's open volume G.open."""
     cic, corner, weight = make_cic(gg)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
@@ -112,7 +114,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                     G.solid_vol[corner(base, o, -1)] += weight(frac, o) * vp
         for I in ti.grouped(G.eps):
             G.eps_old[I] = G.eps[I]
-            G.eps[I] = ti.max(1.0 - G.solid_vol[I] * inv_vol, min_voidage)
+            open_vol = 1.0
+            if ti.static(cut_cells):
+                open_vol = G.open[I]
+            G.eps[I] = ti.max(1.0 - G.solid_vol[I] * inv_vol / open_vol, min_voidage)
 
     @ti.kernel
     def couple(n: ti.i32) -> ti.f64:

@@ -1,7 +1,8 @@
 """Outlets along z. Recycling: a particle whose centre falls below the outlet height re-enters at the
 reinsertion height with the same horizontal position and velocity and no spin (mass is
-conserved; the column behaves as an endless bed). Its wall history is cleared; its pair history is dropped
-by the neighbour rebuild that the solver triggers whenever a particle was moved.
+conserved; the column behaves as an endless bed), its mass and count added to `sink_sum` (kg,
+particles; float64: the mass that passed the outlet). Its wall history is cleared; its pair history
+is dropped by the neighbour rebuild that the solver triggers whenever a particle was moved.
 Sink: a particle whose centre falls below the outlet height leaves the run (inactive), its mass and
 count added to `sink_sum` (kg, particles; float64), from which the discharge rate follows."""
 
@@ -21,6 +22,8 @@ def make_recycle_kernel(height: float, reinsert_height: float, W: int, S):
                 for q in range(W):
                     S.wid[i, q] = -1
                 S.wmask[i] = 0
+                ti.atomic_add(S.sink_sum[0], ti.cast(S.mass[i], ti.f64))
+                ti.atomic_add(S.sink_sum[1], 1.0)
                 moved += 1
         return moved
 

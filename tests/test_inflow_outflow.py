@@ -74,6 +74,9 @@ def test_recycle_outlet_keeps_every_particle(solver_for):
         seen_back |= bool(((z > 0.044) & (s.state.v.to_numpy()[:, 2] < -0.5)).any())
     assert s.state.active.to_numpy().sum() == n0
     assert seen_low and seen_back, "particles fell through the outlet and re-entered at the top"
+    moved = s.outlet_summary()  # counted as they pass, for discharge_rate
+    assert moved["discharged_particles"] >= 1
+    assert moved["discharged_mass_kg"] == pytest.approx(moved["discharged_particles"] * s.model.mass[0], rel=1e-12)
     assert (s.state.x.to_numpy()[:, 2] >= 0.005 - 0.01).all()
 
 

@@ -289,6 +289,7 @@ def check(
            f"(heat.conduction_interval up to {min(int(model.thermal_limit / model.dt), MAX_CONDUCTION_INTERVAL)})"] if model.thermal_limit else []),
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
         *report_lines(model.meshes, model.mesh_table, 2 * float(model.radius.min())),
+        *(model.gas_cut.report_lines() if model.gas_cut is not None else []),
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
         f"kernels: {', '.join(f.kernels())}",
         f"memory (fields): {format_bytes(model.memory_bytes())}, {model.memory_bytes() / model.capacity:.0f} B/particle; "

@@ -24,7 +24,7 @@ from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
 from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
 from tidem.gas_fields import allocate_gas_fields
-from tidem.gas_geometry import face_kinds, gas_grid, inlet_map, solid_cells, tube_walls
+from tidem.gas_geometry import gas_grid, gas_walls, inlet_map, tube_walls
 from tidem.gas_limits import MAX_COURANT
 from tidem.phases import PhaseTimer, clock
 from tidem.species import M_O2, o2_mass_fraction
@@ -49,14 +49,14 @@ class GasPhase:
         self.interval = gas.coupling_interval
         self.dt = gas.coupling_interval * model.dt
         self.tol = max(gas.tolerance, 1e-5 if fp == ti.f32 else 0.0)
-        self.solid = solid_cells(gg, model.tubes)
+        self.solid, self.kinds, self.cut = gas_walls(gg, model.tubes, model.meshes, model.gas_cut)
         self.tubes = model.tubes
-        self.kinds = face_kinds(gg, self.solid)
         self.inlet = inlet_map(gg, gas)
         walls = tube_walls(gg, model.tubes) if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
+        open_fraction = None if self.cut is None else self.cut.open_fraction
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes), self.heat,
-                                                 self.sources, self.species)
+                                                 self.sources, self.species, open_fraction)
         G = self.G
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
@@ -69,7 +69,7 @@ class GasPhase:
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
-            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain)
+            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, self.cut is not None)
         if self.species:
             ox = gas.oxygen
             self._species = make_species_kernel(gg, G, self.flow, gas.density, ox.diffusivity)

@@ -4,7 +4,8 @@ that use them are in `kernels/gas_flow.py`, `kernels/gas_energy.py`, `kernels/ga
 
 Per cell [cells]: eps and eps_old (voidage now and at the last gas step), solid_vol (particle
 volume deposited [m^3]), p (pressure [Pa]), rhs, diag and cg_r, cg_d, cg_q (the pressure
-system and its CG vectors), solid (1 inside a tube); with heat T and T_new [K], H (particle
+system and its CG vectors), solid (1 inside a tube or out of the gas's reach behind a mesh); with
+meshes open (the share of the cell the gas fills, `tidem.gas_mesh`); with heat T and T_new [K], H (particle
 conductance [W/K]) and HT (H T of the particles [W]); with reactions Qs (heat handed back by
 particles that reacted away [J]); with O2 transport Y and Y_new (mass fraction) and o2_sink
 (O2 consumed since the last gas step [kg]); with gas-tube convection wall_A [m^2], wall_T [K],
@@ -28,7 +29,7 @@ from tidem.kernels.gas_grid import GasGrid
 
 
 def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarray], walls: dict | None,
-                        n_tubes: int, heat: bool, sources: bool, species: bool):
+                        n_tubes: int, heat: bool, sources: bool, species: bool, open_fraction: np.ndarray | None = None):
     """Place the fields a scene's gas needs and fill the fixed ones (solid cells, face kinds,
     tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree)."""
     G = SimpleNamespace()
@@ -40,6 +41,8 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         cell_names += ["Qs"]
     if species:
         cell_names += ["Y", "Y_new", "o2_sink"]
+    if open_fraction is not None:
+        cell_names += ["open"]
     for name in cell_names:
         setattr(G, name, ti.field(fp))
         fb.dense(ti.ijk, gg.cells).place(getattr(G, name))
@@ -71,6 +74,8 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         fb.dense(ti.i, 3).place(G.bsum)
     tree = fb.finalize()
     G.solid.from_numpy(solid)
+    if open_fraction is not None:
+        G.open.from_numpy(open_fraction)
     if walls is not None:
         for name, values in walls.items():
             getattr(G, name).from_numpy(values)

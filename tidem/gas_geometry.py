@@ -2,13 +2,15 @@
 `kernels/gas_grid.py`): cells of about `gas.cell_size`, the cells inside tubes (walls for the
 gas), the kind of every face (closed, interior, inlet at the bottom, outlet at the top), the
 inlet velocity of each bottom face, and the tube surface each cell borders (gas-tube
-convection).
+convection). Meshes cut the grid in `tidem.gas_mesh` (blocked faces, cells the gas cannot reach,
+open volume of cut cells); `gas_walls` puts tubes and meshes together.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from tidem.gas_mesh import GasCut, gas_cut
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET
 from tidem.kernels.gas_grid import GasGrid
 
@@ -50,6 +52,38 @@ def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
     for t in tubes:
         solid |= tube_cells(gg, t).astype(np.int32)
     return solid
+
+
+def gas_walls(gg: GasGrid, tubes: list[dict], meshes: list,
+              cut: GasCut | None = None) -> tuple[np.ndarray, list[np.ndarray], GasCut | None]:
+    """The walls the gas sees: solid cells (in a tube, or out of the gas's reach behind a mesh),
+    face kinds (`face_kinds`, with the faces a mesh blocks closed), and the meshes' cut of the grid
+    (`cut` if given, as the Model keeps it; None without meshes; meshes are static when there is
+    gas, `tidem.scene.checks`)."""
+    solid = solid_cells(gg, tubes)
+    kinds = face_kinds(gg, solid)
+    if not meshes:
+        return solid, kinds, None
+    if cut is None:
+        triangles = np.concatenate([m.vertices[m.triangles] for m in meshes])
+        cut = gas_cut(gg, triangles, solid, kinds)
+    solid = solid | cut.unreachable.astype(np.int32)
+    kinds = [np.where(b, CLOSED, k) for b, k in zip(cut.blocked, face_kinds(gg, solid))]
+    return solid, kinds, cut
+
+
+def mesh_gas_cut(scene, tubes: list[dict], meshes: list) -> tuple[GasCut | None, list[str]]:
+    """The meshes' cut of a scene's gas grid (None without gas or meshes), and the refusal of a cut
+    through which no gas can flow."""
+    if scene.gas is None or not meshes:
+        return None, []
+    solid, kinds, cut = gas_walls(gas_grid(scene), tubes, meshes)
+    if (kinds[2][:, :, 0] == INLET).any():
+        return cut, []
+    return cut, [f"meshes: the meshes close every inlet face of the gas grid, or every path from the inlet to the "
+                 f"outlet ({int(cut.unreachable.sum())} of {solid.size} gas cells sealed off), so no gas can flow: "
+                 "open the distributor under the meshes and a way up to the top, or make gas.cell_size fit the "
+                 "openings (a face is closed where a mesh cuts half of it)"]
 
 
 def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:

@@ -12,7 +12,9 @@ import numpy as np
 
 from tidem.contact_params import hysteretic_floor_errors, parameter_tables
 from tidem.features import Features, scene_features
+from tidem.gas_geometry import mesh_gas_cut
 from tidem.gas_limits import gas_step_checks
+from tidem.gas_mesh import GasCut
 from tidem.heat_limits import heat_step_errors
 from tidem.kernels.geometry import Grid, slab_axis_for
 from tidem.memory import (HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, default_neighbors, field_bytes, memory_refusal,
@@ -72,6 +74,7 @@ class Model:
     coarse_grain: np.ndarray | None = None  # k of each particle's group: a parcel of k^3 grains (1: a grain)
     meshes: list = field(default_factory=list)  # [[meshes]] as tidem.mesh_walls.MeshWall
     mesh_table: MeshTable | None = None  # their triangles and bins as the kernels hold them
+    gas_cut: GasCut | None = None  # with [gas]: what the meshes do to the gas grid (tidem.gas_mesh)
 
     def uniform_particles(self) -> tuple[float, float] | None:
         """(radius, mass) where all particles have the same and keep it (no reactions), else None: the
@@ -197,8 +200,11 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
                                                    coarse_grain)
         if errors:
             raise SceneError(src, errors)
+    cut = None
     if scene.gas is not None:
         errors = gas_step_checks(scene, dt, radius, density, placed.x0 if all_fixed else None, grain_radius)
+        cut, cut_errors = mesh_gas_cut(scene, tubes, meshes)
+        errors += cut_errors
         if errors:
             raise SceneError(src, errors)
     rx = rconst = None
@@ -222,7 +228,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
         averaging=averaging_layout(scene),
-        coarse_grain=coarse_grain, meshes=meshes, mesh_table=table,
+        coarse_grain=coarse_grain, meshes=meshes, mesh_table=table, gas_cut=cut,
     )
     too_big = memory_refusal(model)
     if too_big:

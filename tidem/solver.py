@@ -345,8 +345,9 @@ class Solver:
                 "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
 
     def outlet_summary(self) -> dict:
-        """Mass [kg] and number of the particles a sink outlet has taken (empty without one)."""
-        if not self.model.features.sink:
+        """Mass [kg] and number of the particles a sink outlet has taken or a recycle outlet has moved
+        to the top (empty without either)."""
+        if not (self.model.features.sink or self.model.features.recycle):
             return {}
         mass, count = self.state.sink_sum.to_numpy()
         return dict(discharged_mass_kg=float(mass), discharged_particles=int(count))

@@ -301,8 +301,8 @@ def allocate(model: Model) -> State:
     if feat.averaging:
         _place_averaging_fields(p, model)
     p.place((4,), "overflow", ti.i32)
-    if feat.sink:
-        p.place((2,), "sink_sum", ti.f64)  # mass [kg] and number of the particles gone (kernels/outlet.py)
+    if feat.sink or feat.recycle:
+        p.place((2,), "sink_sum", ti.f64)  # mass [kg] and number of the particles through the outlet (kernels/outlet.py)
     p.place((5,), "sums")
     S._tree = p.fb.finalize()
     _fill_particles(S, model)

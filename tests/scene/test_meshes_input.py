@@ -178,9 +178,13 @@ def test_bad_mesh_tables_are_refused_by_the_schema():
         "meshes[0].material: no material named 'stele'; defined: sand, steel"]
     assert messages({"file": "a.stl", "temperature": 353.15})[0].startswith(
         "meshes[0].temperature: temperatures need a [heat] table")
-    (msg,) = messages({"file": "a.stl"}, gas={"cell_size": 0.1})
-    assert msg == ("meshes: mesh walls in a scene with [gas] are not supported yet (the gas grid does not see "
-                   "them); remove [gas] or the meshes")
+    validate(raw_scene(meshes=[{"file": "a.stl", "surface_velocity": [0.1, 0, 0]}], gas={"cell_size": 0.1}))
+    (msg,) = messages({"file": "a.stl", "velocity": [0, 0, 0.1]}, gas={"cell_size": 0.1})
+    assert msg.startswith("meshes[0]: a moving mesh in a scene with [gas] is not supported")
+    msg = messages({"file": "a.stl", "temperature": 353.15}, gas={"cell_size": 0.1},
+                   heat={"initial_temperature": 293.15})[0]
+    assert msg.startswith("meshes[0].temperature: gas convection from a heated mesh is not modelled; set "
+                          "gas.tube_convection = \"none\"")
     assert any(m.startswith("meshes: contact.model = 'none'")
                for m in messages({"file": "a.stl"}, contact={"model": "none"}))
 

@@ -245,9 +245,16 @@ def mesh_checks(scene: Scene) -> list[str]:
     errs = [f"particles[{i}].inside_mesh: there is no meshes[{g.inside_mesh}] ({len(scene.meshes)} [[meshes]] "
             f"in the scene)" for i, g in enumerate(scene.particles)
             if g.inside_mesh is not None and g.inside_mesh >= len(scene.meshes)]
-    if scene.meshes and scene.gas is not None:
-        errs.append("meshes: mesh walls in a scene with [gas] are not supported yet (the gas grid does not see them); "
-                    "remove [gas] or the meshes")
+    if scene.gas is not None:
+        for k, m in enumerate(scene.meshes):
+            if (m.rotation is not None and m.rotation.speed != 0.0) or any(m.velocity):
+                errs.append(f"meshes[{k}]: a moving mesh in a scene with [gas] is not supported (the gas grid is cut "
+                            "by the meshes once, at the start); remove its rotation/velocity (surface_velocity is "
+                            "allowed) or the [gas] table")
+            if m.temperature is not None and scene.gas.tube_convection != "none":
+                errs.append(f"meshes[{k}].temperature: gas convection from a heated mesh is not modelled; set "
+                            "gas.tube_convection = \"none\" (the mesh still heats the particles, through the gas "
+                            "gap too) or remove the temperature")
     return errs
 
 

@@ -30,8 +30,8 @@ def _moving_bed_tube(scene) -> str | None:
 
 
 def _sink(scene) -> str | None:
-    return None if scene.outlet is not None and scene.outlet.type == "sink" else \
-        "needs an [outlet] of type 'sink' (it counts the particles that leave)"
+    return None if scene.outlet is not None and scene.outlet.type in ("sink", "recycle") else \
+        "needs an [outlet] of type 'sink' or 'recycle' (it counts the particles that leave)"
 
 
 def _heated_mesh(scene) -> str | None:

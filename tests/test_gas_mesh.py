@@ -1,0 +1,169 @@
+"""Meshes in the gas grid (`tidem.gas_mesh`): blocked faces, cells out of the gas's reach, open
+fractions of cut cells, against geometry worked out by hand."""
+
+import numpy as np
+import pyvista as pv
+import pytest
+
+from tidem.gas_geometry import face_kinds, gas_walls
+from tidem.gas_mesh import components, gas_cut
+from tidem.kernels.gas_grid import CLOSED, INLET, OUTLET, GasGrid
+from tidem.mesh_walls import MeshWall
+
+
+def grid(n=(8, 8, 8), h=0.01, periodic=(False, False, False)) -> GasGrid:
+    return GasGrid(lo=(0.0, 0.0, 0.0), cells=n, h=(h, h, h), periodic=periodic)
+
+
+def box_triangles(lo, hi) -> np.ndarray:
+    box = pv.Box(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])).triangulate()
+    return np.asarray(box.points, float)[box.regular_faces]
+
+
+def sheet(x0, x1, y0, y1, z) -> np.ndarray:
+    """A horizontal rectangle at height z as two triangles."""
+    a, b, c, d = (x0, y0, z), (x1, y0, z), (x1, y1, z), (x0, y1, z)
+    return np.array([[a, b, c], [a, c, d]], float)
+
+
+def cut(gg, tri):
+    solid = np.zeros(gg.cells, np.int32)
+    return gas_cut(gg, tri, solid, face_kinds(gg, solid))
+
+
+def test_closed_box_hides_its_inside_and_cut_cells_keep_their_open_volume():
+    gg = grid()
+    lo, hi = (0.028,) * 3, (0.052,) * 3
+    c = cut(gg, box_triangles(lo, hi))
+    centres = (np.indices(gg.cells) + 0.5) * 0.01
+    inside = np.all((centres > 0.028) & (centres < 0.052), axis=0)
+    assert inside.sum() == 8 and np.array_equal(c.unreachable, inside)
+    # every face of the 8 hidden cells towards the outside is blocked: 4 x 4 per side
+    assert sum(int(b.sum()) for b in c.blocked) == 6 * 4
+    # open fraction: the share of sub-cell centres outside the box (s = 4), exactly
+    s = c.sub
+    sub = (np.arange(8 * s) + 0.5) * 0.01 / s
+    out = ~np.all(np.stack(np.meshgrid(sub, sub, sub, indexing="ij")) > 0.028, axis=0) | \
+        ~np.all(np.stack(np.meshgrid(sub, sub, sub, indexing="ij")) < 0.052, axis=0)
+    expected = out.reshape(8, s, 8, s, 8, s).mean(axis=(1, 3, 5))
+    reach = ~c.unreachable
+    assert np.allclose(c.open_fraction[reach], np.clip(expected[reach], 0.2, 1.0))
+    assert c.open_fraction[2, 3, 3] == pytest.approx(0.75)  # the box face 0.8 of the way into cell 2
+    # the gas volume within a sub-cell layer of the box's true surface
+    gas_volume = (c.open_fraction * reach).sum() * 1e-6
+    assert gas_volume == pytest.approx(0.08**3 - 0.024**3, abs=6 * 0.024**2 * 0.01 / s)
+
+
+def test_slot_in_a_sheet_is_the_only_path_and_a_whole_sheet_seals_the_inlet_off():
+    gg = grid(n=(8, 2, 8), periodic=(True, True, False))
+    with_slot = np.concatenate([sheet(0.0, 0.03, 0.0, 0.02, 0.041), sheet(0.05, 0.08, 0.0, 0.02, 0.041)])
+    c = cut(gg, with_slot)
+    blocked_z = c.blocked[2][:, :, 4]  # the faces between layers 3 and 4 (z = 0.04)
+    assert np.array_equal(blocked_z.any(axis=1), [True, True, True, False, False, True, True, True])
+    assert not c.unreachable.any() and c.blocked[2].sum() == 12
+    # a whole sheet: the gas fed in below could not leave, so the cells below are sealed off
+    whole = cut(gg, sheet(0.0, 0.08, 0.0, 0.02, 0.041))
+    assert whole.blocked[2][:, :, 4].all()
+    assert whole.unreachable[:, :, :4].all() and not whole.unreachable[:, :, 4:].any()
+    # a sheet across a periodic x wraps onto the first cells
+    wrapped = cut(gg, sheet(0.06, 0.10, 0.0, 0.02, 0.041))
+    assert np.array_equal(wrapped.blocked[2][:, 0, 4], [True, True, False, False, False, False, True, True])
+
+
+def test_a_plate_on_the_distributor_closes_the_inlet_under_it_and_a_pocket_is_sealed():
+    gg = grid(n=(8, 1, 6))
+    plate = sheet(0.0, 0.04, 0.0, 0.01, 0.002)  # below the first cell centres
+    walls = [MeshWall(name="meshes[0]", vertices=plate.reshape(-1, 3), triangles=np.arange(6).reshape(2, 3),
+                      material="steel")]
+    solid, kinds, c = gas_walls(gg, [], walls)
+    assert np.array_equal(kinds[2][:, 0, 0], [CLOSED] * 4 + [INLET] * 4)
+    assert (kinds[2][:, 0, -1] == OUTLET).all() and not solid.any()
+    # a lid over the left half with side walls: the pocket under it cannot be reached
+    lid = np.concatenate([sheet(0.0, 0.04, 0.0, 0.01, 0.032),
+                          box_triangles((0.041, -0.01, -0.01), (0.041, 0.02, 0.032))])
+    walls[0] = MeshWall(name="meshes[0]", vertices=np.concatenate([plate, lid]).reshape(-1, 3),
+                        triangles=np.arange(3 * (len(plate) + len(lid))).reshape(-1, 3), material="steel")
+    solid, kinds, c = gas_walls(gg, [], walls)
+    assert solid[:4, 0, :3].all() and solid.sum() == 12
+    assert (kinds[2][:4, 0, 3] == CLOSED).all()  # the pocket's faces are walls for the gas
+    # without the plate the inlet feeds the pocket, but the gas could not leave it: sealed, inlet closed
+    walls[0] = MeshWall(name="meshes[0]", vertices=lid.reshape(-1, 3), triangles=np.arange(3 * len(lid)).reshape(-1, 3),
+                        material="steel")
+    solid, kinds, c = gas_walls(gg, [], walls)
+    assert solid.sum() == 12 and np.array_equal(kinds[2][:, 0, 0], [CLOSED] * 4 + [INLET] * 4)
+
+
+def test_a_scene_whose_meshes_seal_the_gas_off_is_refused(tmp_path):
+    from tidem.model import build_model
+    from tidem.scene.errors import SceneError
+    from tidem.scene.load import validate
+
+    raw = slot_bed(tmp_path)
+    path = tmp_path / "lid.stl"
+    lid = sheet(-0.01, 0.09, -0.01, 0.02, 0.06)
+    pv.PolyData.from_regular_faces(lid.reshape(-1, 3), np.arange(6).reshape(2, 3)).save(str(path))
+    raw["meshes"].append({"file": str(path), "material": "sand"})
+    with pytest.raises(SceneError) as exc:
+        build_model(validate(raw))
+    (msg,) = exc.value.messages
+    assert msg.startswith("meshes: the meshes close every inlet face of the gas grid") and "48 of 64 gas cells sealed off" in msg
+
+
+def test_components_match_a_breadth_first_search():
+    rng = np.random.default_rng(3)
+    n = 300
+    ea, eb = rng.integers(0, n, 200), rng.integers(0, n, 200)
+    label = components(n, ea, eb)
+    adj = [[] for _ in range(n)]
+    for a, b in zip(ea, eb):
+        adj[a].append(b)
+        adj[b].append(a)
+    for start in range(n):
+        seen, todo = {start}, [start]
+        while todo:
+            for nb in adj[todo.pop()]:
+                if nb not in seen:
+                    seen.add(nb)
+                    todo.append(nb)
+        assert label[start] == min(seen)
+
+
+def slot_bed(tmp_path, u=0.1):
+    """Gas through a 20 mm slot between two 8 mm thick plates (a periodic slab, 80 x 10 x 80 mm,
+    10 mm cells), three fixed grains resting over the left plate."""
+    from tests.conftest import make_scene
+
+    path = tmp_path / "plates.stl"
+    plates = box_triangles((0.0, -0.01, 0.036), (0.03, 0.02, 0.044))
+    plates = np.concatenate([plates, box_triangles((0.05, -0.01, 0.036), (0.08, 0.02, 0.044))])
+    pv.PolyData.from_regular_faces(plates.reshape(-1, 3), np.arange(len(plates) * 3).reshape(-1, 3)).save(str(path))
+    sand = {"density": 2500.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.9, "friction": 0.3}
+    return make_scene(
+        domain={"min": [0, 0, 0], "max": [0.08, 0.01, 0.08], "periodic": ["y"], "walls": "auto",
+                "gravity": [0, 0, -9.81]},
+        materials={"sand": sand},
+        particles=[{"name": "bed", "material": "sand", "diameter": {"value": 0.004}, "fixed": True,
+                    "positions": [[0.01, 0.005, 0.048], [0.015, 0.005, 0.048], [0.02, 0.005, 0.048]]}],
+        meshes=[{"file": str(path), "material": "sand"}],
+        gas={"cell_size": 0.01, "inlet_velocity": u, "coupling_interval": 1},
+        numerics={"dt": 1e-4, "force_dt": True},
+    )
+
+
+def test_gas_through_a_slot_keeps_its_flux_and_cut_cells_keep_the_particle_volume(tmp_path, solver_for):
+    u = 0.1
+    s = solver_for(slot_bed(tmp_path, u))
+    for _ in range(20):
+        s.step()
+    G, gas = s.gas.G, s.gas
+    assert gas.cut.open_fraction[0, 0, 3] == pytest.approx(0.5) and gas.cut.open_fraction[0, 0, 4] == 0.5
+    uz = G.u[2].to_numpy()
+    assert np.all(uz[[0, 1, 2, 5, 6, 7], :, 4] == 0.0)  # the plates
+    # continuity: the whole inlet flow passes the slot, at 4 times the inlet velocity
+    assert uz[3:5, :, 4].mean() == pytest.approx(4 * u, rel=1e-6)
+    assert uz[:, :, 7].mean() == pytest.approx(u, rel=1e-6)  # above the grains, voidage 1
+    # the open-volume voidage of the cut cells holds the grains' whole volume
+    f, eps = gas.cut.open_fraction, G.eps.to_numpy()
+    held = ((1.0 - eps) * f).sum() * 1e-6
+    assert held == pytest.approx(3 * np.pi / 6 * 0.004**3, rel=1e-9)
+    assert gas.pressure_drop() > 0.0
