@@ -108,7 +108,8 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     conducts as those grains do (kernels/heat.py). `atomic`: atomic sums, one thread per particle
     (module docstring); None: on any architecture but the CPU. `quiet_margin` [m] > 0: skip quiet
     partners (module docstring) with that rounding margin; 0: evaluate every listed pair. `meshes`: (mesh
-    count, candidates per particle, contact slots per particle, on-triangle tolerance [m]) adds the
+    count, candidates per particle, contact slots per particle, on-triangle tolerance [m], how far beyond
+    its radius a particle lists triangles [m]) adds the
     mesh walls (`kernels/mesh_contact.py`); the namespace's `list_meshes(n)` is then their broad phase,
     which the neighbour build runs."""
     if atomic is None:
@@ -133,8 +134,8 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     n_meshes = meshes[0] if meshes else 0
     mesh = None
     if n_meshes:
-        _n, per_particle, slots, on_tol = meshes
-        mesh = make_mesh_contacts(S, law, rolling, n_surf, per_particle, slots, surface_reach, on_tol, heat, fluid_layer,
+        _n, per_particle, slots, on_tol, list_reach = meshes
+        mesh = make_mesh_contacts(S, law, rolling, n_surf, per_particle, slots, list_reach, on_tol, heat, fluid_layer,
                                   radiation, grain_scale, (cell_coord, cell_id), radius_of)
 
     @ti.func

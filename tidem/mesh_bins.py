@@ -32,6 +32,7 @@ class MeshTable:
     margin: float  # how far a moving mesh may move before it is binned anew [m] (0: none moves)
     bin_capacity: int  # room for the bins of a moving mesh, rebinned as it moves
     candidates: int  # triangles a particle can list (`candidate_slots`)
+    list_reach: float  # how far beyond its radius a particle lists triangles [m] (`mesh_table`)
 
     def at(self, meshes, t: float) -> np.ndarray:
         """The triangles [T, 3, 3] at time t, image shifts included."""
@@ -43,16 +44,22 @@ class MeshTable:
         return out
 
 
-def mesh_table(meshes, grid, reach: float, margin: float) -> MeshTable:
-    """Triangles with their periodic images (within `reach` of a periodic end) and their bins, listed
+def mesh_table(meshes, grid, radius: float, skin: float, lens: float, margin: float) -> MeshTable:
+    """Triangles with their periodic images (within reach of a periodic end) and their bins, listed
     within reach + `margin` of each cell where a mesh moves (it is binned anew only after moving that
-    far, `tidem.solver`); `reach`: the largest radius plus the candidates' reach."""
+    far, `tidem.solver`). A particle lists the triangles within its radius plus `list_reach` of its
+    centre at each neighbour build: half the `skin` plus the gas `lens` where no mesh moves (a
+    particle moves at most half the skin between two builds), the whole skin plus the lens where one
+    does (the mesh moves up to half the skin too); reach = the largest `radius` plus that."""
     moving = any(m.moving for m in meshes)
     margin = margin if moving else 0.0
+    list_reach = (skin if moving else 0.5 * skin) + lens
+    reach = radius + list_reach
     rest, shift, mesh_id = triangle_table(meshes, grid, reach + margin)
     start, tri = bin_triangles(rest + shift[:, None, :], grid, reach + margin)
     capacity = max(2 * len(tri), len(tri) + 4096) if moving else max(len(tri), 1)
-    return MeshTable(rest, shift, mesh_id, start, tri, reach + margin, margin, capacity, candidate_slots(rest, reach))
+    return MeshTable(rest, shift, mesh_id, start, tri, reach + margin, margin, capacity, candidate_slots(rest, reach),
+                     list_reach)
 
 
 def candidate_slots(tri: np.ndarray, reach: float) -> int:

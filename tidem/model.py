@@ -190,7 +190,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
     k = neighbour_slots(num, d_max, 2.0 * radius.min(), fluid_layer) if contacts else 1  # 1: no list is built
     # triangles within a particle's reach (half the largest diameter, skin, gas lens) of each cell, and a
     # moving mesh's a diameter beyond, so that it is binned anew only after moving that far
-    table = mesh_table(meshes, grid, 0.5 * d_max + skin + heat_reach, d_max) if meshes and contacts else None
+    table = mesh_table(meshes, grid, 0.5 * d_max, skin, heat_reach, d_max) if meshes and contacts else None
 
     heat_cap = thermal_limit = None
     if scene.heat is not None:

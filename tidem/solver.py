@@ -59,18 +59,19 @@ class RunError(RuntimeError):
     """The simulation became invalid; the message names the particle or setting and the fix."""
 
 
-def mesh_settings(model: Model) -> tuple[int, int, int, float] | None:
+def mesh_settings(model: Model) -> tuple[int, int, int, float, float] | None:
     """What the contact kernel needs of the mesh walls (`kernels/mesh_contact.py`): their number, the
-    candidate triangles and contact slots per particle, and the tolerance [m] within which a closest
+    candidate triangles and contact slots per particle, the tolerance [m] within which a closest
     point lies on another triangle (1e-6 of the smallest radius plus 64 rounding units of the largest
-    coordinate); None without meshes."""
+    coordinate), and how far beyond its radius a particle lists triangles [m] (`mesh_bins.mesh_table`);
+    None without meshes."""
     if not model.features.n_meshes:
         return None
     g = model.grid
     largest = max(max(abs(lo), abs(lo + L)) for lo, L in zip(g.lo, g.length))
     eps = np.finfo(np.float32 if model.features.float_bytes == 4 else np.float64).eps
     return (model.features.n_meshes, model.mesh_table.candidates, MESH_SLOTS,
-            1e-6 * float(model.radius.min()) + 64 * eps * largest)
+            1e-6 * float(model.radius.min()) + 64 * eps * largest, model.mesh_table.list_reach)
 
 
 def static_surfaces(model: Model) -> int:
