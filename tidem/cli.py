@@ -51,7 +51,7 @@ def scene(
     loaded = load_scene(path, set_)
     start_taichi(arch, loaded.scene.numerics.precision)
     model = build_or_exit(loaded, smoke=smoke, t_end=t_end)
-    from tidem.run import run
+    from tidem.run_loop import run
 
     if resume is not None and out is not None and out.resolve() != resume.resolve():
         fail(f"--out {out} and --resume {resume}: a resumed run writes into the folder it resumes; drop --out", 2)
