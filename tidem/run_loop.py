@@ -19,6 +19,7 @@ from tidem import __version__, checkpoint
 from tidem import observables as obs
 from tidem.averaging import AverageRecorder, write_averages
 from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
+from tidem.hydrodynamics import bed_top, bed_weight_per_area
 from tidem.io.mesh_output import MeshOutput, mesh_geometry
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
@@ -29,7 +30,7 @@ from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
 from tidem.reactions import reaction_summary
 from tidem.render.settings import render_settings
-from tidem.run_tables import alpha_profile
+from tidem.run_tables import alpha_profile, tube_alpha_columns
 from tidem.solver import RunError, Solver
 
 
@@ -77,6 +78,8 @@ class Output:
                 (self.dir / pvd).unlink(missing_ok=True)
         self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
+        # the column bed_height_m: the bed_height observable's height at each sample
+        self.bed_height = model.features.gas or "bed_height" in model.scene.observables
         self.reactions = (ReactionLog(self.dir, model, [tuple(r) for r in loop.get("reaction_rows", [])] if loop else None)
                           if model.features.reactions else None)
         self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
@@ -123,11 +126,15 @@ class Output:
         row = {"time_s": solver.t, "step": solver.steps}
         row.update(solver.energies())
         row["max_overlap_ratio"] = float(solver.state.ovl.to_numpy().max()) if solver.n else 0.0
+        if self.bed_height:
+            active = solver.state.active.to_numpy().astype(bool)
+            row["bed_height_m"] = bed_top(solver.state.x.to_numpy()[active, 2])
         row.update(solver.outlet_summary())
         if self.model.features.heat:
             row.update(solver.heat_summary())
         if solver.gas is not None:
             row.update(solver.gas.summary())
+        row.update(tube_alpha_columns(self.model, row))
         if self.reactions is not None:
             row.update(reaction_summary(solver))
             self.reactions.sample(solver)
@@ -201,6 +208,9 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
         "wall_s": wall,
         "particle_steps_per_s": (n if mean_particles is None else mean_particles) * steps / wall if wall > 0 else 0.0,
         "precision": f.precision,
+        **({"bed_weight_per_area_Pa": bed_weight_per_area(float(model.mass[model.active0].sum()),
+                                                          model.scene.domain.gravity, model.scene.domain.min,
+                                                          model.scene.domain.max)} if f.gas else {}),
         "scene_echo": model.loaded.raw,
         "render": render_settings(model),
         "render_geometry": {
