@@ -15,12 +15,11 @@ from typing import Callable
 
 import numpy as np
 
-from tidem import __version__, checkpoint
-from tidem import observables as obs
+from tidem import checkpoint
 from tidem.averaging import AverageRecorder, write_averages
 from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
-from tidem.hydrodynamics import bed_top, bed_weight_per_area
-from tidem.io.mesh_output import MeshOutput, mesh_geometry
+from tidem.hydrodynamics import bed_top
+from tidem.io.mesh_output import MeshOutput
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.model import Model
@@ -29,7 +28,7 @@ from tidem.phases import clock
 from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
 from tidem.reactions import reaction_summary
-from tidem.render.settings import render_settings
+from tidem.run_summary import observed, summary
 from tidem.run_tables import alpha_profile, tube_alpha_columns
 from tidem.solver import RunError, Solver
 
@@ -168,81 +167,6 @@ class Output:
         tmp.replace(path)
 
 
-def distributor_parts(scene) -> list[dict]:
-    """The gas distributor for the frames: the background inflow, then each nozzle."""
-    gas = scene.gas
-    if gas is None:
-        return []
-    parts = [{"background": True, "velocity": gas.inlet_velocity}]
-    parts += [{"x": list(nz.x), "y": list(nz.y) if nz.y is not None else None, "velocity": nz.velocity}
-              for nz in gas.nozzles]
-    return parts
-
-
-def summary(model: Model, solver: Solver | None, status: str, wall: float, message: str = "",
-            mean_particles: float | None = None) -> dict:
-    """run.json's table; particle_steps_per_s counts `mean_particles` (the time-series mean,
-    for runs whose particle count changes: pours, outlets, reactions) or else the particles now."""
-    steps = solver.steps if solver else 0
-    n = int(model.active0.sum()) if solver is None else int(solver.state.active.to_numpy().sum())
-    f = model.features
-    out = {
-        "tidem_version": __version__,
-        "scene": model.name,
-        "scene_file": str(model.loaded.source),
-        "status": status,
-        "message": message,
-        "active_models": f.kernels(),
-        "particles": n,
-        **({"grains_at_start": round(float((model.coarse_grain[model.active0] ** 3).sum())),
-            "coarse_grain": sorted({float(k) for k in model.coarse_grain})} if f.coarse_grain else {}),
-        "capacity": model.capacity,
-        "steps": steps,
-        "t_end_s": model.t_end,
-        "time_s": solver.t if solver else 0.0,
-        "dt_s": model.dt,
-        "rayleigh_time_s": model.scales.rayleigh,
-        "contact_time_s": model.scales.contact,
-        "dt_limit_s": model.scales.limit,
-        "neighbour_rebuilds": solver.rebuilds if solver else 0,
-        "wall_s": wall,
-        "particle_steps_per_s": (n if mean_particles is None else mean_particles) * steps / wall if wall > 0 else 0.0,
-        "precision": f.precision,
-        **({"bed_weight_per_area_Pa": bed_weight_per_area(float(model.mass[model.active0].sum()),
-                                                          model.scene.domain.gravity, model.scene.domain.min,
-                                                          model.scene.domain.max)} if f.gas else {}),
-        "scene_echo": model.loaded.raw,
-        "render": render_settings(model),
-        "render_geometry": {
-            "bounds": [v for a in range(3) for v in (model.scene.domain.min[a], model.scene.domain.max[a])],
-            "periodic": list(model.grid.periodic),
-            "tubes": [{"c": t["c"], "mask": t["mask"], "r": t["r"], "T": t["T"]} for t in model.tubes],
-            "distributor": distributor_parts(model.scene),
-            "meshes": mesh_geometry(model.meshes),
-        },
-    }
-    return out
-
-
-def observed(model: Model, solver: Solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None) -> dict:
-    """run.json's `observables` (the scene's declared ones, `tidem.observables`) and the
-    per-particle or per-time tables behind some of them."""
-    names = model.scene.observables
-    if not names:
-        return {}
-    rec = obs.record(model, solver, series, bed_profiles)
-    out = {"observables": obs.compute(names, rec)}
-    if bed_profiles:
-        out["packed_bed_profiles"] = bed_profiles
-    if rec.contact_rows:
-        out["contact_times"] = rec.contact_rows
-    if rec.impact_rows:
-        out["impact_heat"] = rec.impact_rows
-    if rec.packet_rows:
-        out["packet_model"] = rec.packet_rows
-    return out
-
-
 class StopRequest:
     """SIGINT and SIGTERM ask the run loop to stop at the end of the current step (it then
     writes a checkpoint and flushes every output); a second Ctrl-C interrupts at once.
@@ -284,13 +208,15 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     checkpoint (`tidem.checkpoint.load`) of this scene in `out_dir` to continue from.
     Checkpoints are written every `output.checkpoint_wall_s` of wall time (and every
     `output.checkpoint_interval` of simulated time if set), at the end, and when SIGINT or
-    SIGTERM stops the run; never after a failure, which keeps the last good one.
+    SIGTERM stops the run; never after a failure, which keeps the last good one. A solver made
+    here (none passed) is released at the end.
     """
     loop = resume[0]["loop"] if resume else None
     out = Output(out_dir, model, loop)
     if resume is None:
         out.write_summary(summary(model, None, "starting", 0.0))
     t_setup = time.perf_counter()
+    owned = solver is None  # made here: its Taichi fields are freed at the end (a notebook runs many)
     try:
         solver = solver or Solver(model)
         if resume is not None:
@@ -425,4 +351,6 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                 f"{group}_{key}": value for group, values in figures.items() for key, value in values.items()
                 if isinstance(value, (int, float)) and not isinstance(value, bool)}
         out.write_summary(data)
+        if owned:
+            solver.release()
     return RunResult(status=status, out_dir=Path(out_dir), steps=solver.steps, wall_s=wall, message=message, summary=data)
