@@ -9,7 +9,7 @@ import numpy as np
 
 from tidem.io.vtp import read_vtp
 from tidem.model import build_model
-from tidem.run import run
+from tidem.run_loop import run
 from tidem.runtime import ensure_taichi
 from tidem.scene.load import load
 

@@ -13,7 +13,7 @@ from tidem.averaging import CELLS_CSV, RINGS_CSV, VTI, cell_rows, ring_rows
 from tidem.io.vtp import read_vti
 from tidem.model import build_model
 from tidem.render.plots import read_series
-from tidem.run import run
+from tidem.run_loop import run
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
 

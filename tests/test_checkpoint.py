@@ -15,7 +15,7 @@ from tidem.cli import app
 from tidem.io.vtp import read_vtp
 from tidem.model import build_model
 from tidem.render.plots import read_series
-from tidem.run import run
+from tidem.run_loop import run
 from tidem.scene.load import validate
 from tidem.solver import Solver
 
@@ -119,7 +119,7 @@ def test_sigterm_checkpoints_at_a_step_boundary_and_resume_is_bit_identical(unin
 
     monkeypatch.setattr(Solver, "_step", step)
     stopped = run(build_model(validate(hot_pour())), tmp_path, progress=False)
-    # the run loop stops at the end of the steps it hands the solver at once (50 at most, tidem.run)
+    # the run loop stops at the end of the steps it hands the solver at once (50 at most, tidem.run_loop)
     assert stopped.status == "interrupted" and "SIGTERM" in stopped.message and 777 <= stopped.steps <= 800
     monkeypatch.setattr(Solver, "_step", real_step)
     assert checkpoint.load(tmp_path)[0]["solver"]["steps"] == stopped.steps

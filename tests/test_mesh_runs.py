@@ -10,7 +10,7 @@ from tests.conftest import make_scene
 from tests.test_checkpoint import snapshots
 from tidem import checkpoint
 from tidem.model import build_model
-from tidem.run import run
+from tidem.run_loop import run
 from tidem.scene.load import validate
 
 SAND = {"density": 2600.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.3, "friction": 0.5,

@@ -35,6 +35,37 @@ def test_bed_height_of_a_lattice_is_its_top_layer():
     assert obs.bed_height(rec)["bed_height_m"] == pytest.approx(4.5 * 0.002)
 
 
+def test_bed_height_time_mean_takes_the_second_half_of_the_column():
+    rec = lattice_record(spacing=0.002, layers=5)
+    t = np.linspace(0.0, 1.0, 11)
+    rec.series = {"time_s": t, "bed_height_m": np.where(t < 0.5, 0.2, 0.05 + 0.01 * (t > 0.75))}
+    got = obs.bed_height(rec)
+    assert got["bed_height_m"] == pytest.approx(4.5 * 0.002), "the end value stays the end state's"
+    assert got["bed_height_mean_m"] == pytest.approx((3 * 0.05 + 3 * 0.06) / 6)
+    rec.series = {"time_s": t}  # a series without the column (resumed from a run before it existed)
+    assert obs.bed_height(rec)["bed_height_mean_m"] is None
+
+
+def test_pressure_fluctuation_std_and_frequency_only_with_five_periods():
+    """A 2 s record: a 12 Hz sine of 40 Pa amplitude over a drifting 500 Pa has std 40/sqrt(2) and
+    12 periods in the second half; at 3 Hz the second half holds 3 periods: no frequency, a note,
+    and tradeoff's table keeps only the numbers."""
+    rec = lattice_record()
+    t = np.linspace(0.0, 2.0, 2001)
+    for f, resolved in ((12.0, True), (3.0, False)):
+        rec.series = {"time_s": t, "gas_pressure_drop_Pa": 500.0 + 40.0 * np.sin(2 * np.pi * f * t)
+                      + np.where(t < 1.0, 300.0 * (1.0 - t), 0.0)}
+        got = obs.pressure_fluctuation(rec)
+        assert got["pressure_drop_std_Pa"] == pytest.approx(40.0 / np.sqrt(2.0), rel=0.01)
+        if resolved:
+            assert got["pressure_drop_frequency_Hz"] == pytest.approx(12.0, abs=0.05)
+            assert "pressure_drop_frequency_note" not in got
+        else:
+            assert got["pressure_drop_frequency_Hz"] is None
+            assert "fewer than 5" in got["pressure_drop_frequency_note"]
+            assert obs.flatten({"pressure_fluctuation": got}) == {"pressure_drop_std_Pa": got["pressure_drop_std_Pa"]}
+
+
 def test_plug_flow_gives_mass_times_speed_over_height():
     u, floor = 0.02, -0.01
     rec = lattice_record(u=u, spacing=0.002, layers=5, floor=floor)

@@ -8,7 +8,8 @@ import pytest
 from typer.testing import CliRunner
 
 from tidem.cli import app
-from tidem.tradeoff import agree, parse_vary, variants
+from tidem.observables import flatten
+from tidem.tradeoff import agree, parse_vary, variants, with_errors, write_report
 
 runner = CliRunner()
 
@@ -25,6 +26,27 @@ def test_agree_is_relative():
     assert agree({"a": 1.0, "b": 2.0}, {"a": 1.005, "b": 2.0}, 0.01)
     assert not agree({"a": 1.0}, {"a": 1.02}, 0.01)
     assert not agree({"a": 1.0}, {"b": 1.0}, 0.01), "nothing to compare is not agreement"
+
+
+def test_pressure_fluctuation_and_mean_bed_height_reach_the_table(tmp_path):
+    """Two variants' run.json observables as run_variant reads them: the new columns get values
+    and errors; a frequency left out (null, with its note) is no column, the note no number."""
+    def observed(std, freq, mean):
+        note = {} if freq else {"pressure_drop_frequency_note": "fewer than 5 periods"}
+        return {"pressure_fluctuation": {"pressure_drop_std_Pa": std, "pressure_drop_frequency_Hz": freq, **note},
+                "bed_height": {"bed_height_m": 0.05, "bed_height_mean_m": mean}}
+
+    results = [{"index": i, "overrides": [f"v={i}"], "status": "finished", "wall_s": 10.0 * (i + 1),
+                "particle_steps_per_s": 1e6, "steps": 100 * (i + 1), "dt_s": 1e-5, "observables": flatten(obs)}
+               for i, obs in enumerate([observed(80.0, None, 0.060), observed(78.0, 4.2, 0.058)])]
+    results, ref = with_errors(results)
+    assert ref == 1
+    write_report(results, ref, tmp_path)
+    rows = list(csv.DictReader(open(tmp_path / "tradeoff.csv")))
+    assert float(rows[0]["error_pressure_drop_std_Pa"]) == pytest.approx(2.0 / 78.0)
+    assert float(rows[0]["error_bed_height_mean_m"]) == pytest.approx(0.002 / 0.058)
+    assert rows[0]["pressure_drop_frequency_Hz"] == "" and float(rows[1]["pressure_drop_frequency_Hz"]) == 4.2
+    assert "pressure_drop_frequency_note" not in rows[0]
 
 
 def test_tradeoff_on_two_local_workers(tmp_path):

@@ -15,7 +15,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from tidem.cli_common import Sets, app, build_or_exit, fail, load_scene, start_taichi, writable
+from tidem.cli_common import Sets, app, build_or_exit, fail, load_scene, start_taichi
 from tidem.scene.errors import SceneError
 
 def main() -> None:
@@ -44,72 +44,30 @@ def scene(
     resume: Annotated[Optional[Path], typer.Option(help="Continue the run in this folder from its checkpoint.npz")] = None,
 ):
     """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
-    if arch not in ("cpu", "cuda", "vulkan", "auto"):
-        fail(f"--arch {arch}: choose cpu, cuda, vulkan or auto", 2)
-    if t_end is not None and not 0 < t_end < float("inf"):
-        fail(f"--t-end {t_end}: the end time must be a finite number > 0 s", 2)
-    loaded = load_scene(path, set_)
-    start_taichi(arch, loaded.scene.numerics.precision)
-    model = build_or_exit(loaded, smoke=smoke, t_end=t_end)
-    from tidem.run import run
-
-    if resume is not None and out is not None and out.resolve() != resume.resolve():
-        fail(f"--out {out} and --resume {resume}: a resumed run writes into the folder it resumes; drop --out", 2)
-    out_dir = resume or out or Path("renders") / model.name
-    writable(out_dir, "--resume" if resume is not None else "--out")
-    if resume is None:
-        _fits_on_disk(loaded, model, out_dir, frames=not no_render)
-    checkpoint = _checkpoint(resume, loaded, model) if resume is not None else None
-    _passage_notes(loaded.scene, "tidem: note: ")
-    typer.echo(f"tidem: {model.name}: {int(model.active0.sum())} particles"
-               f"{f' (+{model.capacity - int(model.active0.sum())} to pour)' if model.pours else ''}, "
-               f"dt = {model.dt:.3g} s, t_end = {model.t_end:.4g} s -> {out_dir}", err=True)
-    live = _live_view(model) if view else None
-    with _background(out_dir, no_render) as background:
-        result = run(model, out_dir, progress=not quiet, on_snapshot=background, view=live, resume=checkpoint)
-        if live is not None:
-            live.close()
-        s = result.summary
-        typer.echo(f"{result.status}: {s['steps']} steps in {s['wall_s']:.1f} s "
-                   f"({s['particle_steps_per_s']:.3g} particle-steps/s); output in {out_dir}", err=True)
-        if background is not None and result.status != "interrupted":
-            _finish_render(background, out_dir, model.name, quiet)
-    if result.status == "failed":
-        fail(f"run stopped: {result.message}\nthe snapshots written before the failure are in {out_dir}", 3)
-    if result.status == "interrupted":
-        fail(result.message + f"; finished output is in {out_dir}", 130)
-
-
-def _fits_on_disk(loaded, model, out_dir: Path, frames: bool) -> None:
-    """Exit 2 when the output folder's disk cannot hold what the run will write (`tidem.output_size`)."""
-    import shutil
-
-    from tidem.memory import format_bytes
-    from tidem.output_size import output_bytes
-
-    n, need = output_bytes(model, frames)
-    free = shutil.disk_usage(out_dir).free
-    if need > free:
-        key = "output.interval" if loaded.scene.output.interval else "output.snapshots"
-        fail(f"{loaded.source}: {key}: the run would write about {format_bytes(need)} ({n} snapshots"
-             f"{' and frames' if frames else ''}), but {out_dir} has {format_bytes(free)} free; write fewer snapshots "
-             f"(a smaller output.snapshots or a longer output.interval) or choose another folder with --out", 2)
-
-
-def _checkpoint(run_dir: Path, loaded, model):
-    """The checkpoint in run_dir, checked against the scene (exit 2 with the reason if not usable)."""
-    from tidem import checkpoint
+    from tidem import launch
+    from tidem.scene.load import load
 
     try:
-        meta, arrays = checkpoint.load(run_dir)
-        checkpoint.check_scene(meta, loaded.raw, model.features.precision)
-    except checkpoint.CheckpointError as exc:
-        fail(f"--resume {run_dir}: {exc}", 2)
-    if meta["solver"]["t"] >= model.t_end * (1 - 1e-12):
-        fail(f"--resume {run_dir}: the checkpoint is at {checkpoint.describe(meta)}, already at or past the end time "
-              f"{model.t_end:.6g} s; raise numerics.t_end (--t-end) to continue", 2)
-    typer.echo(f"tidem: resuming from {checkpoint.describe(meta)}", err=True)
-    return meta, arrays
+        launch.check_options(arch, t_end)
+        loaded = load(path, set_ or [])
+        prepared = launch.prepare(loaded, out, resume, smoke, t_end, arch, frames=not no_render, say=_say)
+    except SceneError as exc:
+        fail(exc.render(), 2)
+    except launch.InputError as exc:
+        fail(str(exc), 2)
+    live = _live_view(prepared.model) if view else None
+    try:
+        result = launch.execute(prepared, progress=not quiet, render=not no_render, view=live,
+                                frame_progress=_report(quiet), say=_say)
+    except launch.RenderInterrupted as exc:
+        fail(str(exc), 130)
+    message = launch.outcome_message(result)
+    if message is not None:
+        fail(message, 3 if result.status == "failed" else 130)
+
+
+def _say(line: str) -> None:
+    typer.echo(line, err=True)
 
 
 def _live_view(model):
@@ -127,24 +85,6 @@ def _live_view(model):
     return None
 
 
-def _background(out_dir: Path, no_render: bool):
-    """The background renderer of a run (a context manager yielding None when not rendering)."""
-    import contextlib
-
-    if no_render:
-        return contextlib.nullcontext()
-    from tidem.render.gl import RenderUnavailable, prepare_offscreen
-
-    try:
-        prepare_offscreen()
-    except RenderUnavailable as exc:
-        typer.echo(f"tidem: not rendering: {exc}", err=True)
-        return contextlib.nullcontext()
-    from tidem.render.background import BackgroundRenderer
-
-    return BackgroundRenderer(out_dir)
-
-
 def _report(quiet: bool):
     """Progress of the frames on stderr (a running count on a terminal, the last line otherwise)."""
     shown = [-1]
@@ -156,39 +96,9 @@ def _report(quiet: bool):
     return report
 
 
-def _finish_render(background, run_dir: Path, name: str, quiet: bool) -> None:
-    """Wait for the frames still to render in the background, then the movie and plots."""
-    if background.proc is None:
-        typer.echo(f"tidem: nothing to render: {run_dir} has no snapshots", err=True)
-        return
-    try:
-        error = background.finish(progress=_report(quiet))
-    except KeyboardInterrupt:
-        background.stop()
-        fail(f"interrupted while rendering; the finished frames are in {run_dir / 'frames'} "
-              f"('tidem render {run_dir}' renders them all)", 130)
-    if error:
-        typer.echo(f"tidem: rendering failed: {error}", err=True)
-        return
-    _movie_and_plots(run_dir, name)
-
-
-def _movie_and_plots(run_dir: Path, name: str, gif=None) -> None:
-    import json
-
-    from tidem.render.movie import write_movie
-    from tidem.render.plots import plot_timeseries
-
-    settings = json.loads((run_dir / "run.json").read_text()).get("render", {})
-    movie = write_movie(run_dir, name, fps=settings.get("fps", 15),
-                        gif=settings.get("gif", False) if gif is None else gif)
-    plots = plot_timeseries(run_dir)
-    typer.echo(f"frames in {run_dir / 'frames'}, movie {movie}"
-               f"{f', plots in {plots[0].parent}' if plots else ''}", err=True)
-
-
 def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_thickness=None, gif=None) -> None:
     """Frames and movie of a run folder; a machine without OpenGL gets a message, not a crash."""
+    from tidem.launch import movie_and_plots
     from tidem.render.gl import RenderUnavailable, prepare_offscreen
 
     try:
@@ -202,7 +112,7 @@ def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_th
         render_frames(run_dir, style, progress=_report(False))
     except (ValueError, KeyError) as exc:
         fail(f"tidem render: {exc.args[0] if exc.args else exc}", 2)
-    _movie_and_plots(run_dir, name, gif)
+    movie_and_plots(run_dir, name, _say, gif)
 
 
 @app.command()
@@ -298,15 +208,9 @@ def check(
         f"({format_bytes(without)} with --no-render)",
     ]
     typer.echo("\n".join(lines))
-    _passage_notes(loaded.scene, "note: ", err=False)
+    from tidem.launch import passage_notes
 
-
-def _passage_notes(scene, prefix: str, err: bool = True) -> None:
-    """Advice on passages too narrow for the scene's coarse-grained parcels (`tidem.scene.passages`)."""
-    from tidem.scene.passages import narrow_passages
-
-    for note in narrow_passages(scene):
-        typer.echo(prefix + note, err=err)
+    passage_notes(loaded.scene, "note: ", typer.echo)
 
 
 @app.command()
@@ -375,7 +279,14 @@ def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, thre
     loaded = load_scene(path, sets)
     start_taichi(arch, loaded.scene.numerics.precision, threads)
     model = build_or_exit(loaded)
-    start = _checkpoint(resume, loaded, model) if resume is not None else None
+    start = None
+    if resume is not None:
+        from tidem.launch import InputError, load_checkpoint
+
+        try:
+            start = load_checkpoint(resume, loaded, model, _say)
+        except InputError as exc:
+            fail(str(exc), 2)
     try:
         result = profile_scene(loaded, steps, warmup, model, start)
     except SceneError as exc:

@@ -37,15 +37,12 @@ def load_scene(path: Optional[str], sets: Optional[list[str]]):
 
 
 def start_taichi(arch: str, precision: str, threads: int | None = None) -> None:
-    """Start Taichi on `arch` (`tidem.runtime.ensure_taichi`), or exit 2: the backend does not start
-    here, or TIDEM_COMPILE / TIDEM_BIND hold a value it does not know."""
-    from tidem.runtime import BackendUnavailable, ensure_taichi
+    """Start Taichi on `arch` (`tidem.launch.start_taichi`), or exit 2 with the reason."""
+    from tidem.launch import InputError, start_taichi as start
 
     try:
-        ensure_taichi(arch, precision, threads)
-    except BackendUnavailable as exc:
-        fail(f"--arch {arch}: {exc}; use --arch cpu", 2)
-    except ValueError as exc:  # TIDEM_COMPILE or TIDEM_BIND
+        start(arch, precision, threads)
+    except InputError as exc:
         fail(str(exc), 2)
 
 
@@ -61,13 +58,9 @@ def build_or_exit(loaded, smoke=False, t_end=None):
 
 def writable(out_dir: Path, option: str) -> None:
     """Exit 2 naming the option unless `out_dir` is (or can be made) a folder this process can write in."""
-    import tempfile
+    from tidem.launch import InputError, writable as check
 
     try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-        tempfile.TemporaryFile(dir=out_dir).close()
-    except FileExistsError:
-        fail(f"{option} {out_dir}: a file of that name exists; give a folder", 2)
-    except OSError as exc:
-        fail(f"{option} {out_dir}: cannot write there ({exc.strerror or exc}); choose another output folder "
-              f"with --out", 2)
+        check(out_dir, option)
+    except InputError as exc:
+        fail(str(exc), 2)

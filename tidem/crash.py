@@ -29,7 +29,7 @@ def log_folder() -> Path:
 def write_log(exc: BaseException) -> Path | None:
     """Write the command line, versions and traceback of `exc` to a new log file; its path, or
     None where no file could be written."""
-    from tidem import __version__
+    from tidem.version import __version__
 
     text = (f"tidem {__version__}, Python {platform.python_version()}, {platform.platform()}\n"
             f"command: {' '.join(sys.argv)}\nworking folder: {os.getcwd()}\n\n"

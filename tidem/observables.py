@@ -26,6 +26,7 @@ from typing import Callable
 import numpy as np
 
 from tidem.drum_heat import mesh_heat_rows
+from tidem.hydrodynamics import MIN_PERIODS, bed_top, dominant_frequency, second_half
 from tidem.run_tables import alpha_profile, contact_times, impact_heat_rows, packet_model_rows
 from tidem.scene.observable_names import NEEDS
 
@@ -111,8 +112,10 @@ def compute(names: list[str], rec: RunRecord) -> dict[str, dict[str, float]]:
 
 
 def flatten(observed: dict[str, dict[str, float]]) -> dict[str, float]:
-    """run.json's observables as one {column: value} table (what tradeoff compares)."""
-    return {col: float(val) for values in observed.values() for col, val in values.items() if val is not None}
+    """run.json's observables as one {column: value} table of numbers (what tradeoff compares):
+    values left out (None) and notes (text saying why) are dropped."""
+    return {col: float(val) for values in observed.values() for col, val in values.items()
+            if isinstance(val, (int, float)) and not isinstance(val, bool)}
 
 
 def _late_mean(rec: RunRecord, column: str) -> float:
@@ -144,14 +147,17 @@ def tube_mean_alpha(rec: RunRecord) -> dict[str, float]:
 
 
 def _top(rec: RunRecord) -> float:
-    return float(np.percentile(rec.x[:, 2], 99)) if len(rec.x) else float("nan")
+    return bed_top(rec.x[:, 2])
 
 
 @observable("bed_height")
 def bed_height(rec: RunRecord) -> dict[str, float]:
     """Bed height [m] (`bed_height_m`): the 99th percentile of the particle centres' z at the
-    end (absolute z, not above the floor; the percentile ignores a few thrown particles)."""
-    return {"bed_height_m": _top(rec)}
+    end (absolute z, not above the floor; the percentile ignores a few thrown particles), and
+    the time mean of the same height over the second half (`bed_height_mean_m`, timeseries
+    column bed_height_m; a bubbling bed heaves, so its end value is one instant of that)."""
+    mean = _late_mean(rec, "bed_height_m") if "bed_height_m" in rec.series else None
+    return {"bed_height_m": _top(rec), "bed_height_mean_m": mean}
 
 
 @observable("outlet_mass_flow")
@@ -237,6 +243,29 @@ def pressure_drop(rec: RunRecord) -> dict[str, float]:
     """Gas pressure drop across the bed [Pa] (`pressure_drop_Pa`): the distributor-level minus
     the top pressure (timeseries column gas_pressure_drop_Pa), time mean over the second half."""
     return {"pressure_drop_Pa": _late_mean(rec, "gas_pressure_drop_Pa")}
+
+
+@observable("pressure_fluctuation")
+def pressure_fluctuation(rec: RunRecord) -> dict[str, float | str | None]:
+    """Fluctuation of the gas pressure drop over the second half (timeseries column
+    gas_pressure_drop_Pa): its standard deviation [Pa] (`pressure_drop_std_Pa`) and its dominant
+    frequency [Hz] (`pressure_drop_frequency_Hz`: the highest peak of the detrended spectrum,
+    `tidem.hydrodynamics.dominant_frequency`). The frequency is given only where the second half
+    holds at least five of its periods; otherwise it is null and `pressure_drop_frequency_note`
+    says why (the run is too short to tell a frequency)."""
+    t, p = second_half(rec.series["time_s"], rec.series["gas_pressure_drop_Pa"])
+    out: dict[str, float | str | None] = {"pressure_drop_std_Pa": float(np.std(p)) if len(p) else None,
+                                          "pressure_drop_frequency_Hz": None}
+    peak = dominant_frequency(t, p)
+    if peak is None:
+        out["pressure_drop_frequency_note"] = f"too few samples in the second half ({len(p)}) for a spectrum"
+    elif not peak.resolved:
+        out["pressure_drop_frequency_note"] = (
+            f"the strongest peak ({peak.frequency_Hz:.3g} Hz) has {peak.periods:.1f} periods in the second half "
+            f"({t[-1] - t[0]:.3g} s), fewer than {MIN_PERIODS}; run longer (numerics.t_end) to resolve it")
+    else:
+        out["pressure_drop_frequency_Hz"] = peak.frequency_Hz
+    return out
 
 
 @observable("kinetic_energy")

@@ -143,3 +143,26 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
                  for b in range(bins)]
         means.append(mean)
     return rows, means
+
+
+def tube_alpha_columns(model, row: dict) -> dict[str, float]:
+    """Each heated tube's heat-transfer coefficient at one time-series sample [W/(m^2 K)]
+    (`tubes0_alpha_W_m2K`): `alpha_profile`'s definitions at an instant rather than averaged, the
+    reference T_ref = heat.initial_temperature. A fixed-temperature tube: its heat flow into the
+    particles and (with gas-tube convection) into the gas, `row`'s `tubes0_heat_W` and
+    `tubes0_gas_heat_W`, over its area in the domain and T_wall - T_ref; a heated foil: q_el over
+    its mean foil temperature's excess, `tubes0_foil_T_K` - T_ref. Empty without [heat]."""
+    if not model.features.heat:
+        return {}
+    t_ref = model.scene.heat.initial_temperature
+    out = {}
+    for tube in model.tubes:
+        key = tube["name"].replace("[", "").replace("]", "")
+        if tube["flux"] is not None and f"{key}_foil_T_K" in row and row[f"{key}_foil_T_K"] != t_ref:
+            out[f"{key}_alpha_W_m2K"] = tube["flux"] / (row[f"{key}_foil_T_K"] - t_ref)
+        elif tube["T"] is not None and tube["T"] != t_ref and f"{key}_heat_W" in row:
+            length = model.grid.length[tube["mask"].index(0.0)]
+            area = 2 * math.pi * tube["r"] * length
+            heat = row[f"{key}_heat_W"] + row.get(f"{key}_gas_heat_W", 0.0)
+            out[f"{key}_alpha_W_m2K"] = heat / (area * (tube["T"] - t_ref))
+    return out

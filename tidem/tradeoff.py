@@ -56,7 +56,7 @@ def variants(vary: list[tuple[str, list[str]]], fixed: list[str] = ()) -> list[V
 def run_variant(scene: str, overrides: list[str], out_dir: str, threads: int) -> dict:
     """Run one variant (in a Dask worker process); return its figures or its error."""
     from tidem.model import build_model
-    from tidem.run import run
+    from tidem.run_loop import run
     from tidem.runtime import ensure_taichi
     from tidem.scene.errors import SceneError
     from tidem.scene.load import load

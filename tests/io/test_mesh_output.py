@@ -89,12 +89,12 @@ def test_resume_keeps_the_moving_mesh_files_of_kept_snapshots_only(tmp_path):
 
 
 def test_a_run_writes_its_meshes_and_names_them_in_run_json(tmp_path):
-    """tidem.run wires MeshOutput in: the folder, meshes.pvd beside snapshots.pvd, run.json."""
+    """tidem.run_loop wires MeshOutput in: the folder, meshes.pvd beside snapshots.pvd, run.json."""
     import json
 
     from tests.conftest import make_scene
     from tidem.model import build_model
-    from tidem.run import run
+    from tidem.run_loop import run
     from tidem.scene.load import validate
 
     model = build_model(validate(make_scene(numerics={"t_end": 2e-5}, output={"snapshots": 2})))

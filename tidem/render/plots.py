@@ -1,5 +1,5 @@
-"""Plots of a run (`plots/*.png`): energies, coordination, overlap and the scene's own
-columns against simulated time, the tube alpha profile, the packed-bed profiles, maps of the
+"""Plots of a run (`plots/*.png`): the time-series figures grouped by meaning
+(`tidem.render.series_plots`), the tube alpha profile, the packed-bed profiles, maps of the
 time-averaged bed ([averaging]) and of the gas at the last snapshot, drawn with matplotlib
 (which pyvista brings)."""
 
@@ -10,18 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-LABELS = {
-    "kinetic_energy_J": "Kinetic energy [J]",
-    "rotational_energy_J": "Rotational energy [J]",
-    "potential_energy_J": "Potential energy [J]",
-    "coordination": "Contacts per particle [-]",
-    "particles": "Particles [-]",
-    "max_overlap_ratio": "Largest overlap / radius [-]",
-    "plate_z_m": "Outlet plate height [m]",
-}
-
 
 def read_series(path: Path) -> dict[str, np.ndarray]:
+    """A CSV file with a header row (timeseries.csv, alpha_profile.csv) as {column: float array};
+    empty cells are NaN."""
     with open(path) as fh:
         rows = list(csv.DictReader(fh))
     if not rows:
@@ -30,49 +22,25 @@ def read_series(path: Path) -> dict[str, np.ndarray]:
 
 
 def plot_timeseries(run_dir: Path) -> list[Path]:
-    """Write plots/energy.png and plots/timeseries.png (one panel per column); returns the files."""
+    """Write the run's plots: the time-series figures (`tidem.render.series_plots`: energy,
+    hydrodynamics, heat, solver and the raw columns), then where the run has them the alpha
+    profile, the packed-bed profiles, the averages and the gas maps; returns the files."""
+    import json
+
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from tidem.render.series_plots import plot_series
 
     data = read_series(Path(run_dir) / "timeseries.csv")
     if len(data.get("time_s", [])) < 2:
         return []
     out_dir = Path(run_dir) / "plots"
     out_dir.mkdir(exist_ok=True)
-    t = data["time_s"]
-    written = []
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for key in ("kinetic_energy_J", "rotational_energy_J"):
-        ax.plot(t, data[key], label=LABELS[key])
-    ax.set_xlabel("Time [s]")
-    ax.set_ylabel("Energy [J]")
-    if np.nanmax(data["kinetic_energy_J"]) > 0:
-        ax.set_yscale("symlog", linthresh=max(1e-12, 1e-6 * np.nanmax(data["kinetic_energy_J"])))
-    ax.legend()
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    written.append(out_dir / "energy.png")
-    fig.savefig(written[-1], dpi=110)
-    plt.close(fig)
-
-    columns = [k for k in data if k not in ("time_s", "step")]
-    rows = (len(columns) + 1) // 2
-    fig, axes = plt.subplots(rows, 2, figsize=(10, 2.6 * rows), sharex=True, squeeze=False)
-    for ax, key in zip(axes.ravel(), columns):
-        ax.plot(t, data[key], lw=1.2)
-        ax.set_ylabel(LABELS.get(key, key), fontsize=9)
-        ax.grid(alpha=0.3)
-    for ax in axes.ravel()[len(columns):]:
-        ax.set_visible(False)
-    for ax in axes[-1]:
-        ax.set_xlabel("Time [s]")
-    fig.tight_layout()
-    written.append(out_dir / "timeseries.png")
-    fig.savefig(written[-1], dpi=110)
-    plt.close(fig)
+    summary = Path(run_dir) / "run.json"
+    written = plot_series(data, json.loads(summary.read_text()) if summary.exists() else {}, out_dir)
 
     profile = Path(run_dir) / "alpha_profile.csv"
     if profile.exists():

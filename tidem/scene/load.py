@@ -89,17 +89,22 @@ def read_toml(path: Path) -> dict:
 _INDEX = re.compile(r"^(\w+)\[(\d+)\]$")
 
 
-def apply_override(raw: dict, assignment: str) -> None:
+def apply_override(raw: dict, assignment: str | tuple[str, Any]) -> None:
     """Apply 'a.b[1].c=VALUE' to the raw TOML dict; VALUE is read as a TOML value (text if not).
-    A key that cannot be followed raises ValueError naming the key and the fix."""
-    if "=" not in assignment:
+    A (key, value) pair (the Python API's overrides) sets the value as it is. A key that cannot
+    be followed raises ValueError naming the key and the fix."""
+    if isinstance(assignment, tuple):
+        key, value = assignment
+        key, text = key.strip(), repr(value)
+    elif "=" not in assignment:
         raise ValueError(f"--set {assignment!r}: expected KEY=VALUE, e.g. outlet.speed=0.003")
-    key, text = assignment.split("=", 1)
-    key = key.strip()
-    try:
-        value = tomllib.loads(f"v = {text.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = text.strip()
+    else:
+        key, text = assignment.split("=", 1)
+        key = key.strip()
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
     parts: list[str | int] = []
     for piece in key.split("."):
         m = _INDEX.match(piece)
@@ -143,8 +148,9 @@ def _key_text(parts: list) -> str:
     return out
 
 
-def load(name_or_path: str | None, overrides: list[str] = ()) -> LoadedScene:
-    """Load and validate a scene; raises `SceneError` listing every problem."""
+def load(name_or_path: str | None, overrides: list[str | tuple[str, Any]] = ()) -> LoadedScene:
+    """Load and validate a scene with overrides ('KEY=VALUE' as --set gives them, or (key, value)
+    pairs); raises `SceneError` listing every problem."""
     path = resolve(name_or_path)
     source = str(path)
     raw = read_toml(path)

@@ -56,6 +56,7 @@ NEEDS: dict[str, Callable | None] = {
     "contact_time": None,
     "restitution": None,
     "pressure_drop": _gas,
+    "pressure_fluctuation": _gas,
     "kinetic_energy": None,
     "impact_heat": _heat,
     "packet_model": _moving_bed_tube,

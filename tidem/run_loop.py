@@ -15,11 +15,11 @@ from typing import Callable
 
 import numpy as np
 
-from tidem import __version__, checkpoint
-from tidem import observables as obs
+from tidem import checkpoint
 from tidem.averaging import AverageRecorder, write_averages
 from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
-from tidem.io.mesh_output import MeshOutput, mesh_geometry
+from tidem.hydrodynamics import bed_top
+from tidem.io.mesh_output import MeshOutput
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.model import Model
@@ -28,8 +28,8 @@ from tidem.phases import clock
 from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
 from tidem.reactions import reaction_summary
-from tidem.render.settings import render_settings
-from tidem.run_tables import alpha_profile
+from tidem.run_summary import observed, summary
+from tidem.run_tables import alpha_profile, tube_alpha_columns
 from tidem.solver import RunError, Solver
 
 
@@ -77,6 +77,8 @@ class Output:
                 (self.dir / pvd).unlink(missing_ok=True)
         self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
+        # the column bed_height_m: the bed_height observable's height at each sample
+        self.bed_height = model.features.gas or "bed_height" in model.scene.observables
         self.reactions = (ReactionLog(self.dir, model, [tuple(r) for r in loop.get("reaction_rows", [])] if loop else None)
                           if model.features.reactions else None)
         self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
@@ -123,11 +125,15 @@ class Output:
         row = {"time_s": solver.t, "step": solver.steps}
         row.update(solver.energies())
         row["max_overlap_ratio"] = float(solver.state.ovl.to_numpy().max()) if solver.n else 0.0
+        if self.bed_height:
+            active = solver.state.active.to_numpy().astype(bool)
+            row["bed_height_m"] = bed_top(solver.state.x.to_numpy()[active, 2])
         row.update(solver.outlet_summary())
         if self.model.features.heat:
             row.update(solver.heat_summary())
         if solver.gas is not None:
             row.update(solver.gas.summary())
+        row.update(tube_alpha_columns(self.model, row))
         if self.reactions is not None:
             row.update(reaction_summary(solver))
             self.reactions.sample(solver)
@@ -159,78 +165,6 @@ class Output:
         tmp = path.with_suffix(".json.tmp")
         tmp.write_text(json.dumps(data, indent=2, default=float))
         tmp.replace(path)
-
-
-def distributor_parts(scene) -> list[dict]:
-    """The gas distributor for the frames: the background inflow, then each nozzle."""
-    gas = scene.gas
-    if gas is None:
-        return []
-    parts = [{"background": True, "velocity": gas.inlet_velocity}]
-    parts += [{"x": list(nz.x), "y": list(nz.y) if nz.y is not None else None, "velocity": nz.velocity}
-              for nz in gas.nozzles]
-    return parts
-
-
-def summary(model: Model, solver: Solver | None, status: str, wall: float, message: str = "",
-            mean_particles: float | None = None) -> dict:
-    """run.json's table; particle_steps_per_s counts `mean_particles` (the time-series mean,
-    for runs whose particle count changes: pours, outlets, reactions) or else the particles now."""
-    steps = solver.steps if solver else 0
-    n = int(model.active0.sum()) if solver is None else int(solver.state.active.to_numpy().sum())
-    f = model.features
-    out = {
-        "tidem_version": __version__,
-        "scene": model.name,
-        "scene_file": str(model.loaded.source),
-        "status": status,
-        "message": message,
-        "active_models": f.kernels(),
-        "particles": n,
-        **({"grains_at_start": round(float((model.coarse_grain[model.active0] ** 3).sum())),
-            "coarse_grain": sorted({float(k) for k in model.coarse_grain})} if f.coarse_grain else {}),
-        "capacity": model.capacity,
-        "steps": steps,
-        "t_end_s": model.t_end,
-        "time_s": solver.t if solver else 0.0,
-        "dt_s": model.dt,
-        "rayleigh_time_s": model.scales.rayleigh,
-        "contact_time_s": model.scales.contact,
-        "dt_limit_s": model.scales.limit,
-        "neighbour_rebuilds": solver.rebuilds if solver else 0,
-        "wall_s": wall,
-        "particle_steps_per_s": (n if mean_particles is None else mean_particles) * steps / wall if wall > 0 else 0.0,
-        "precision": f.precision,
-        "scene_echo": model.loaded.raw,
-        "render": render_settings(model),
-        "render_geometry": {
-            "bounds": [v for a in range(3) for v in (model.scene.domain.min[a], model.scene.domain.max[a])],
-            "periodic": list(model.grid.periodic),
-            "tubes": [{"c": t["c"], "mask": t["mask"], "r": t["r"], "T": t["T"]} for t in model.tubes],
-            "distributor": distributor_parts(model.scene),
-            "meshes": mesh_geometry(model.meshes),
-        },
-    }
-    return out
-
-
-def observed(model: Model, solver: Solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None) -> dict:
-    """run.json's `observables` (the scene's declared ones, `tidem.observables`) and the
-    per-particle or per-time tables behind some of them."""
-    names = model.scene.observables
-    if not names:
-        return {}
-    rec = obs.record(model, solver, series, bed_profiles)
-    out = {"observables": obs.compute(names, rec)}
-    if bed_profiles:
-        out["packed_bed_profiles"] = bed_profiles
-    if rec.contact_rows:
-        out["contact_times"] = rec.contact_rows
-    if rec.impact_rows:
-        out["impact_heat"] = rec.impact_rows
-    if rec.packet_rows:
-        out["packet_model"] = rec.packet_rows
-    return out
 
 
 class StopRequest:
@@ -274,13 +208,15 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     checkpoint (`tidem.checkpoint.load`) of this scene in `out_dir` to continue from.
     Checkpoints are written every `output.checkpoint_wall_s` of wall time (and every
     `output.checkpoint_interval` of simulated time if set), at the end, and when SIGINT or
-    SIGTERM stops the run; never after a failure, which keeps the last good one.
+    SIGTERM stops the run; never after a failure, which keeps the last good one. A solver made
+    here (none passed) is released at the end.
     """
     loop = resume[0]["loop"] if resume else None
     out = Output(out_dir, model, loop)
     if resume is None:
         out.write_summary(summary(model, None, "starting", 0.0))
     t_setup = time.perf_counter()
+    owned = solver is None  # made here: its Taichi fields are freed at the end (a notebook runs many)
     try:
         solver = solver or Solver(model)
         if resume is not None:
@@ -415,4 +351,6 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                 f"{group}_{key}": value for group, values in figures.items() for key, value in values.items()
                 if isinstance(value, (int, float)) and not isinstance(value, bool)}
         out.write_summary(data)
+        if owned:
+            solver.release()
     return RunResult(status=status, out_dir=Path(out_dir), steps=solver.steps, wall_s=wall, message=message, summary=data)
