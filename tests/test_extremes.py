@@ -10,7 +10,7 @@ from tests.conftest import make_scene
 from tidem.model import build_model
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
-from tidem.solver import RunError, Solver
+from tidem.solver import Solver
 
 
 def cluster(d, youngs, restitution, friction, **extra):

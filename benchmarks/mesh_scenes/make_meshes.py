@@ -8,8 +8,8 @@
   72 facets around, with 6 lifters (bars 8 mm high, 3 mm wide, standing on the wall: narrower than
   a bead, so that no lattice site of a fill lies inside one).
 - wedge_hopper.stl: one period (x from 0 to 0.037 m, moving_bed_hopper's tube pitch) of a wedge
-  hopper: two plates inclined 30 degrees from the vertical that run from a ridge at z = 0.025 m on
-  the period's edges down to an 8 mm slot (x from 0.0145 to 0.0225 m) at z = 0, 6 mm deep in y
+  hopper: two plates inclined 30 degrees from the vertical that run from a ridge at z = 0.026 m on
+  the period's edges down to a 7 mm slot (x from 0.015 to 0.022 m) at z = 0, 6 mm deep in y
   (the slab is 4.2 mm deep between its walls), 8 x 2 triangles each.
 
 Usage: python benchmarks/mesh_scenes/make_meshes.py  (from the repository root)
@@ -64,7 +64,7 @@ def kiln_drum(R=0.1, L=0.02, facets=72, lifters=6, h=0.008, w=0.003):
     save("kiln_drum.stl", tris)
 
 
-def wedge_hopper(period=0.037, slot=0.008, angle=30.0, y0=-0.001, y1=0.0052, n=8):
+def wedge_hopper(period=0.037, slot=0.007, angle=30.0, y0=-0.001, y1=0.0052, n=8):
     tris = []
     run = period / 2 - slot / 2
     top = run / math.tan(math.radians(angle))

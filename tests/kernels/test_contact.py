@@ -86,8 +86,7 @@ def test_restitution_sweep(solver_for, law):
     linear law needs a finer step (dt_fraction 0.002) for 1 %.
     """
     es = [0.1, 0.3, 0.5, 0.7, 0.9]
-    n = len(es)
-    positions, velocities, mats = [], [], {}
+    mats = {}
     groups = []
     for k, e in enumerate(es):
         mats[f"m{k}"] = {**GLASS, "youngs_modulus": 1e7, "restitution": e}

@@ -147,7 +147,7 @@ class LiveView:
         self.gui.triangles(tri_a, tri_b, tri_c, color=0x9A9A9A)
 
     def _draw_bar(self) -> None:
-        gui, w, h = self.gui, self.res[0], self.res[1]
+        gui, w = self.gui, self.res[0]
         n = len(self.table)
         x0, x1 = (self.plot_w + 20) / w, (self.plot_w + 45) / w
         y = 0.15 + 0.7 * np.arange(n + 1) / n
