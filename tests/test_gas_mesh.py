@@ -109,6 +109,35 @@ def test_a_scene_whose_meshes_seal_the_gas_off_is_refused(tmp_path):
     assert msg.startswith("meshes: the meshes close every inlet face of the gas grid") and "48 of 64 gas cells sealed off" in msg
 
 
+def test_a_plate_drawn_past_the_period_is_clipped_to_it_and_one_across_its_end_wraps():
+    gg = grid(n=(8, 2, 8), periodic=(False, True, False))
+    plate = box_triangles((0.0, -0.01, 0.036), (0.03, 0.03, 0.044))  # y from -0.01 to 0.03: spans the period
+    wall = MeshWall(name="meshes[0]", vertices=plate.reshape(-1, 3), triangles=np.arange(3 * len(plate)).reshape(-1, 3),
+                    material="steel")
+    c = gas_walls(gg, [], [wall])[2]
+    assert not c.blocked[1].any()  # its caps at y = -0.01 and 0.03 lie outside the apparatus
+    assert c.blocked[2][:3, :, 4].all() and c.blocked[2].sum() == 6 and c.blocked[0].sum() == 4
+    # a plate over part of the period, across its end, continues on the other side: y from 12 to 28 mm
+    # (period 20 mm), its caps at 12 and 28 - 20 = 8 mm both on the face at y = 10 mm (face 1)
+    short = box_triangles((0.0, 0.012, 0.036), (0.03, 0.028, 0.044))
+    wall = MeshWall(name="meshes[0]", vertices=short.reshape(-1, 3), triangles=np.arange(3 * len(short)).reshape(-1, 3),
+                    material="steel")
+    c = gas_walls(gg, [], [wall])[2]
+    assert c.blocked[1][:3, 1, 3:5].all() and not c.blocked[1][:, 0, :].any()
+
+
+def test_a_pocket_closed_across_a_periodic_boundary_is_sealed():
+    gg = grid(n=(8, 1, 6), periodic=(True, False, False))
+    walls = np.concatenate([sheet(0.0, 0.04, 0.0, 0.01, 0.032),  # lid over cells 0-3
+                            box_triangles((0.041, -0.01, -0.01), (0.041, 0.02, 0.032)),  # right: cells 3 | 4
+                            box_triangles((0.079, -0.01, -0.01), (0.079, 0.02, 0.032))])  # left: cells 7 | 0 (wrapped)
+    wall = MeshWall(name="meshes[0]", vertices=walls.reshape(-1, 3), triangles=np.arange(3 * len(walls)).reshape(-1, 3),
+                    material="steel")
+    solid, kinds, c = gas_walls(gg, [], [wall])
+    assert c.blocked[0][0, 0, :3].all() and c.blocked[0][4, 0, :3].all()  # face 0: between cells 7 and 0
+    assert solid[:4, 0, :3].all() and solid.sum() == 12
+
+
 def test_components_match_a_breadth_first_search():
     rng = np.random.default_rng(3)
     n = 300
@@ -157,6 +186,8 @@ def test_gas_through_a_slot_keeps_its_flux_and_cut_cells_keep_the_particle_volum
         s.step()
     G, gas = s.gas.G, s.gas
     assert gas.cut.open_fraction[0, 0, 3] == pytest.approx(0.5) and gas.cut.open_fraction[0, 0, 4] == 0.5
+    assert s.model.gas_cut.report_lines() == ["gas grid: 10 faces blocked by meshes, 0 cells the gas cannot reach "
+                                              "(solid), 12 cut cells (open fraction 0.50-0.50, 4^3 sub-cells per cell)"]
     uz = G.u[2].to_numpy()
     assert np.all(uz[[0, 1, 2, 5, 6, 7], :, 4] == 0.0)  # the plates
     # continuity: the whole inlet flow passes the slot, at 4 times the inlet velocity

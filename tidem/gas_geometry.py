@@ -66,10 +66,22 @@ def gas_walls(gg: GasGrid, tubes: list[dict], meshes: list,
         return solid, kinds, None
     if cut is None:
         triangles = np.concatenate([m.vertices[m.triangles] for m in meshes])
-        cut = gas_cut(gg, triangles, solid, kinds)
+        cut = gas_cut(gg, triangles, solid, kinds, spans_period(gg, meshes))
     solid = solid | cut.unreachable.astype(np.int32)
     kinds = [np.where(b, CLOSED, k) for b, k in zip(cut.blocked, face_kinds(gg, solid))]
     return solid, kinds, cut
+
+
+def spans_period(gg: GasGrid, meshes: list) -> np.ndarray:
+    """[T, 3] per triangle (all meshes in order) and axis: the axis is periodic and the triangle's
+    mesh spans the whole period along it, so that what it holds beyond the period is not part of
+    the apparatus (the particles' rule, `mesh_bins.triangle_table`); elsewhere a mesh wraps."""
+    rows = []
+    for m in meshes:
+        flags = [gg.periodic[a] and m.vertices[:, a].min() <= gg.lo[a] + 1e-6 * gg.cells[a] * gg.h[a]
+                 and m.vertices[:, a].max() >= gg.lo[a] + (1 - 1e-6) * gg.cells[a] * gg.h[a] for a in range(3)]
+        rows.append(np.tile(flags, (len(m.triangles), 1)))
+    return np.concatenate(rows).astype(bool)
 
 
 def mesh_gas_cut(scene, tubes: list[dict], meshes: list) -> tuple[GasCut | None, list[str]]:

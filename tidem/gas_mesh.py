@@ -54,11 +54,17 @@ def subdivision(gg: GasGrid) -> int:
     return next(s for s in (4, 2, 1) if cells * s**3 <= MAX_SUBCELLS or s == 1)
 
 
-def ray_crossings(gg: GasGrid, tri: np.ndarray, c: int, s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def ray_crossings(gg: GasGrid, tri: np.ndarray, c: int, s: int,
+                  clip: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Where rays along axis c through the sub-cell centres pierce the triangles tri [T, 3, 3]:
-    (ia, ib, t), the ray's sub-cell indices on the two other axes (wrapped on periodic axes) and
-    the coordinate along c [m] of each crossing. A ray through an edge or vertex counts for every
-    triangle that holds it (a closed mesh has no gaps)."""
+    (ia, ib, t, clip_c), the ray's sub-cell indices on the two other axes (wrapped on periodic
+    axes), the coordinate along c [m] of each crossing, and whether it is to be clipped to the
+    period along c rather than wrapped. `clip` [T, 3]: per triangle and periodic axis, whether its
+    mesh spans the whole period there (`gas_walls`), so that what lies beyond the period is not part
+    of the apparatus (as for the particles, `mesh_bins.triangle_table`). A ray through an edge or
+    vertex counts for every triangle that holds it (a closed mesh has no gaps)."""
+    if clip is None:
+        clip = np.zeros((len(tri), 3), bool)
     a, b = [k for k in range(3) if k != c]
     ha, hb = gg.h[a] / s, gg.h[b] / s
     na, nb = gg.cells[a] * s, gg.cells[b] * s
@@ -66,7 +72,7 @@ def ray_crossings(gg: GasGrid, tri: np.ndarray, c: int, s: int) -> tuple[np.ndar
     pb = (tri[:, :, b] - gg.lo[b]) / hb - 0.5
     area2 = (pa[:, 1] - pa[:, 0]) * (pb[:, 2] - pb[:, 0]) - (pa[:, 2] - pa[:, 0]) * (pb[:, 1] - pb[:, 0])
     keep = np.abs(area2) > 1e-12  # parallel to the axis: no ray pierces it
-    tri, pa, pb, area2 = tri[keep], pa[keep], pb[keep], area2[keep]
+    tri, pa, pb, area2, clip = tri[keep], pa[keep], pb[keep], area2[keep], clip[keep]
     i0, i1 = np.ceil(pa.min(1) - 1e-9).astype(np.int64), np.floor(pa.max(1) + 1e-9).astype(np.int64)
     j0, j1 = np.ceil(pb.min(1) - 1e-9).astype(np.int64), np.floor(pb.max(1) + 1e-9).astype(np.int64)
     if not gg.periodic[a]:
@@ -86,38 +92,44 @@ def ray_crossings(gg: GasGrid, tri: np.ndarray, c: int, s: int) -> tuple[np.ndar
     v = (ea1 * qb - eb1 * qa) / area2[k]
     tol = 1e-9
     hit = (u >= -tol) & (v >= -tol) & (u + v <= 1.0 + tol)
+    hit &= ~clip[k, a] | ((ia >= 0) & (ia < na))
+    hit &= ~clip[k, b] | ((ib >= 0) & (ib < nb))
     k, ia, ib, u, v = k[hit], ia[hit], ib[hit], u[hit], v[hit]
     t = tri[k, 0, c] + u * (tri[k, 1, c] - tri[k, 0, c]) + v * (tri[k, 2, c] - tri[k, 0, c])
-    return ia % na, ib % nb, t
+    return ia % na, ib % nb, t, clip[k, c]
 
 
-def _links(gg: GasGrid, c: int, t: np.ndarray, spacing: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+def _links(gg: GasGrid, c: int, t: np.ndarray, clip: np.ndarray, spacing: float,
+           n: int) -> tuple[np.ndarray, np.ndarray]:
     """Index of the link (between consecutive centres of spacing `spacing`, n of them along c)
-    that each crossing t lies on, with whether it lies inside the domain. Open axis: link j + 1
-    joins centres j and j + 1, link 0 the low boundary to centre 0, link n centre n - 1 to the high
-    boundary; periodic axis: link j joins centres j and j + 1 (mod n)."""
+    that each crossing t lies on, with whether it lies inside the domain (on a periodic axis: or
+    is wrapped into it, unless `clip`). Open axis: link j + 1 joins centres j and j + 1, link 0 the
+    low boundary to centre 0, link n centre n - 1 to the high boundary; periodic axis: link j joins
+    centres j and j + 1 (mod n)."""
     x = (t - gg.lo[c]) / spacing - 0.5
     if gg.periodic[c]:
-        return np.floor(x).astype(np.int64) % n, np.ones(t.shape, bool)
+        return np.floor(x).astype(np.int64) % n, ~clip | ((x >= -0.5) & (x < n - 0.5))
     inside = (x >= -0.5) & (x <= n - 0.5)
     return np.clip(np.floor(x).astype(np.int64) + 1, 0, n), inside
 
 
-def _cut_links(gg: GasGrid, tri: np.ndarray, s: int) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def _cut_links(gg: GasGrid, tri: np.ndarray, s: int, clip: np.ndarray | None) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Per axis c: the sub-cell links a mesh cuts (bool, shape of the sub-grid with n_c s + 1
-    links along an open c, n_c s periodic) and the cell-centre-to-centre rays it cuts (bool, face
-    count along c, sub-cells across)."""
+    links along an open c, n_c s periodic, numbered as `_links` does) and the cell-centre-to-centre
+    rays it cuts (bool, numbered as the faces are, `gas_grid.GasGrid.face_shape`, sub-cells across)."""
     sub_cut, face_cut = [], []
     for c in range(3):
         a, b = [k for k in range(3) if k != c]
-        ia, ib, t = ray_crossings(gg, tri, c, s)
+        ia, ib, t, clip_c = ray_crossings(gg, tri, c, s, clip)
         nf = gg.cells[c] * s
         shape = [gg.cells[k] * s for k in range(3)]
         fine = np.zeros([nf if (k == c and gg.periodic[c]) else (nf + 1 if k == c else shape[k]) for k in range(3)],
                         bool)
         coarse = np.zeros([gg.face_shape(c)[c] if k == c else shape[k] for k in range(3)], bool)
         for arr, spacing, n in ((fine, gg.h[c] / s, nf), (coarse, gg.h[c], gg.cells[c])):
-            link, inside = _links(gg, c, t, spacing, n)
+            link, inside = _links(gg, c, t, clip_c, spacing, n)
+            if arr is coarse and gg.periodic[c]:
+                link = (link + 1) % n  # as the faces count: face j between cells j - 1 and j
             idx = [None, None, None]
             idx[c], idx[a], idx[b] = link[inside], ia[inside], ib[inside]
             arr[tuple(idx)] = True
@@ -170,11 +182,13 @@ def _interior(links: np.ndarray, c: int, periodic: bool) -> np.ndarray:
 
 
 
-def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[np.ndarray]) -> GasCut:
+def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[np.ndarray],
+            clip: np.ndarray | None = None) -> GasCut:
     """Cut the gas grid with the triangles [T, 3, 3] (scene coordinates, all meshes); `solid` the
-    cells already solid (tubes) and `kinds` their face kinds (`gas_geometry.face_kinds`)."""
+    cells already solid (tubes) and `kinds` their face kinds (`gas_geometry.face_kinds`); `clip`
+    [T, 3] as `ray_crossings` takes it (None: every mesh wraps across periodic boundaries)."""
     s = subdivision(gg)
-    sub_cut, face_cut = _cut_links(gg, np.asarray(triangles, float), s)
+    sub_cut, face_cut = _cut_links(gg, np.asarray(triangles, float), s, clip)
     blocked = []
     for c in range(3):
         split = []  # the face array with each cross axis split into (cells, sub-cells)
@@ -183,7 +197,9 @@ def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[n
         share = face_cut[c].reshape(split).mean(axis=_sub_axes(c))
         blocked.append((share >= BLOCKED_SHARE) & (kinds[c] != CLOSED))
     kinds = [np.where(bl, CLOSED, kd) for bl, kd in zip(blocked, kinds)]
-    open_faces = [_interior(kinds[c] != CLOSED, c, gg.periodic[c]) for c in range(3)]
+    # faces as links between consecutive cells (`_reached`): on a periodic axis link j is face j + 1
+    open_faces = [np.roll(kinds[c] != CLOSED, -1, axis=c) if gg.periodic[c] else _interior(kinds[c] != CLOSED, c, False)
+                  for c in range(3)]
     seeds = np.zeros(gg.cells, bool)
     seeds[:, :, -1] = kinds[2][:, :, -1] == OUTLET
     reach = _reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool))
