@@ -76,11 +76,8 @@ def spans_period(gg: GasGrid, meshes: list) -> np.ndarray:
     """[T, 3] per triangle (all meshes in order) and axis: the axis is periodic and the triangle's
     mesh spans the whole period along it, so that what it holds beyond the period is not part of
     the apparatus (the particles' rule, `mesh_bins.triangle_table`); elsewhere a mesh wraps."""
-    rows = []
-    for m in meshes:
-        flags = [gg.periodic[a] and m.vertices[:, a].min() <= gg.lo[a] + 1e-6 * gg.cells[a] * gg.h[a]
-                 and m.vertices[:, a].max() >= gg.lo[a] + (1 - 1e-6) * gg.cells[a] * gg.h[a] for a in range(3)]
-        rows.append(np.tile(flags, (len(m.triangles), 1)))
+    rows = [np.tile([gg.periodic[a] and m.spans(a, gg.lo[a], gg.cells[a] * gg.h[a]) for a in range(3)],
+                    (len(m.triangles), 1)) for m in meshes]
     return np.concatenate(rows).astype(bool)
 
 

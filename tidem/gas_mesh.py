@@ -42,11 +42,10 @@ class GasCut:
     def report_lines(self) -> list[str]:
         cut = (self.open_fraction < 1.0) & ~self.unreachable
         faces = sum(int(b.sum()) for b in self.blocked)
+        cells = (f"{int(cut.sum())} cut cells (open fraction {self.open_fraction[cut].min():.2f}-"
+                 f"{self.open_fraction[cut].max():.2f}, {self.sub}^3 sub-cells per cell)" if cut.any() else "no cut cells")
         return [f"gas grid: {faces} faces blocked by meshes, {int(self.unreachable.sum())} cells the gas cannot "
-                f"reach (solid), {int(cut.sum())} cut cells (open fraction {self.open_fraction[cut].min():.2f}-"
-                f"{self.open_fraction[cut].max():.2f}, {self.sub}^3 sub-cells per cell)" if cut.any() else
-                f"gas grid: {faces} faces blocked by meshes, {int(self.unreachable.sum())} cells the gas cannot "
-                f"reach (solid), no cut cells"]
+                f"reach (solid), {cells}"]
 
 
 def subdivision(gg: GasGrid) -> int:

@@ -88,9 +88,7 @@ def triangle_table(meshes, grid, reach: float) -> tuple[np.ndarray, np.ndarray, 
         if not grid.periodic[a]:
             continue
         lo, L = grid.lo[a], grid.length[a]
-        tol = 1e-6 * L  # an STL holds float32 coordinates
-        spans = np.array([m.vertices[:, a].min() <= lo + tol and m.vertices[:, a].max() >= lo + L - tol
-                          for m in meshes] + [False])
+        spans = np.array([m.spans(a, lo, L) for m in meshes] + [False])
         moved = verts + shift[:, None, :]
         low, high = moved[:, :, a].min(axis=1), moved[:, :, a].max(axis=1)
         needed = ~spans[mesh_id]

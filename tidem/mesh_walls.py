@@ -41,6 +41,14 @@ class MeshWall:
         planes and tubes): name, material, friction override, fixed temperature."""
         return dict(name=self.name, material=self.material, friction=self.friction, T=self.temperature)
 
+    def spans(self, axis: int, lo: float, length: float) -> bool:
+        """Whether the mesh reaches from one end of the period [lo, lo + length] along `axis` to the
+        other (within 1e-6 of it: an STL holds float32 coordinates); what it holds beyond is then not
+        part of the apparatus (a drum's slice drawn over one period)."""
+        tol = 1e-6 * length
+        v = self.vertices[:, axis]
+        return bool(v.min() <= lo + tol and v.max() >= lo + length - tol)
+
     @property
     def moving(self) -> bool:
         return self.speed != 0.0 or any(self.velocity)
