@@ -35,25 +35,41 @@ error that names the setting to raise (never a silent drop).
 import taichi as ti
 
 from .geometry import make_geometry, make_slabs
+from .ordered import in_order
 from .sizes import make_sizes
 
 
+SCAN_BLOCK = 1024  # cells a thread sums in the prefix sum of a large grid
+
+
+def scan_blocks(n_cells: int) -> int:
+    """Blocks of the cell grid's prefix sum (`S.cell_block`), one for a small grid."""
+    return max(1, -(-n_cells // SCAN_BLOCK))
+
+
 def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False,
-                          after=(), uniform: tuple[float, float] | None = None):
-    """Return the kernel `rebuild(n)`, which refreshes `S.nbr`, `S.nbr_n`, the slabs (`S.slab`,
-    `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, then the Taichi funcs
-    f(n) in `after`, in one kernel launch).
+                          after=(), uniform: tuple[float, float] | None = None, slab_lists: bool | None = None):
+    """Return the kernels (rebuild(n), cell_order(n)). `rebuild` refreshes `S.nbr`, `S.nbr_n`, the
+    slabs (`S.slab`, `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, then
+    the Taichi funcs f(n) in `after`, in one kernel launch). `cell_order` writes the particles in
+    cell order to `S.sorted_idx[0:n]` (step 1's counting sort, the inactive ones after the active,
+    in any order): a storage sort's order on a GPU (`tidem.storage_order`).
 
     S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
     grow) each row also records the particle's radius at the build, `S.r_build`. `uniform`: (radius, mass)
-    of every particle (`kernels/sizes.py`), or None.
+    of every particle (`kernels/sizes.py`), or None. `slab_lists`: whether the contact passes sweep
+    slab lists (`kernels/contact.py`; None: on the CPU, where they do); without, the serial pass that
+    lists them is left out (on a GPU it ran in one thread: 700 000 particles a build).
     """
+    if slab_lists is None:
+        slab_lists = in_order()
     min_image, _wrap, cell_coord, cell_id = make_geometry(grid)
     radius_of, _mass_of = make_sizes(S, uniform)
     n_slabs, slab_of, succ, pred = make_slabs(grid)
     cells = grid.cells
     per = grid.periodic
     n_cells = grid.n_cells
+    n_scan = scan_blocks(n_cells)
     # the neighbour cells along each axis: -1, 0, +1, or on a periodic axis of fewer than three
     # cells each of its cells once (0, +1 wrapped), so that no cell is scanned twice
     span = [(0, cells[a]) if per[a] and cells[a] < 3 else (-1, 2) for a in range(3)]
@@ -85,13 +101,40 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 ti.atomic_add(S.slab_start[s + 1], 1)
 
     @ti.func
+    def cell_sums():
+        """cell_start = cell_fill = the exclusive prefix sum of cell_count: in one pass where the grid
+        is small, else in blocks of SCAN_BLOCK cells (the blocks' totals in parallel, their offsets in
+        one pass, the cells in parallel again): a 1.8 M-cell grid in one GPU thread is a
+        million-step loop at every build. Integer sums: the same numbers either way."""
+        if ti.static(n_cells <= SCAN_BLOCK):
+            run = 0
+            ti.loop_config(serialize=True)
+            for c in range(n_cells):
+                S.cell_start[c] = run
+                S.cell_fill[c] = run
+                run += S.cell_count[c]
+        else:
+            for b in range(n_scan):
+                total = 0
+                for c in range(b * SCAN_BLOCK, ti.min((b + 1) * SCAN_BLOCK, n_cells)):
+                    total += S.cell_count[c]
+                S.cell_block[b] = total
+            run = 0
+            ti.loop_config(serialize=True)
+            for b in range(n_scan):
+                total = S.cell_block[b]
+                S.cell_block[b] = run
+                run += total
+            for b in range(n_scan):
+                at = S.cell_block[b]
+                for c in range(b * SCAN_BLOCK, ti.min((b + 1) * SCAN_BLOCK, n_cells)):
+                    S.cell_start[c] = at
+                    S.cell_fill[c] = at
+                    at += S.cell_count[c]
+
+    @ti.func
     def prefix_sums():
-        run = 0
-        ti.loop_config(serialize=True)
-        for c in range(n_cells):
-            S.cell_start[c] = run
-            S.cell_fill[c] = run
-            run += S.cell_count[c]
+        cell_sums()
         ti.loop_config(serialize=True)
         for s in range(n_slabs):
             S.slab_start[s + 1] += S.slab_start[s]
@@ -308,11 +351,22 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         count_cells(n)
         prefix_sums()
         scatter(n)
-        list_slabs(n)
+        if ti.static(slab_lists):
+            list_slabs(n)
         build_rows(n)
         match_rows(n)
         move_rows(n)
         for then in ti.static(after):
             then(n)
 
-    return rebuild
+    @ti.kernel
+    def cell_order(n: ti.i32):
+        count_cells(n)
+        prefix_sums()
+        scatter(n)
+        S.sort_tail[None] = S.slab_start[n_slabs]  # the active particles fill sorted_idx up to there
+        for i in range(n):
+            if not S.active[i]:
+                S.sorted_idx[ti.atomic_add(S.sort_tail[None], 1)] = i
+
+    return rebuild, cell_order

@@ -23,6 +23,28 @@ def test_laps_accumulate_per_phase_and_total():
     assert set(table) <= set(PHASES) | {"total"}
 
 
+def test_a_sampled_profile_shares_the_steps_time_out_as_its_sampled_steps_do():
+    """A GPU run's profile (`tidem.phases`): every step's time booked where the host happened to wait
+    (here all under "kick-drift") is shared out among the phases as the sampled steps share theirs;
+    output keeps its own time, and the total is unchanged."""
+    timer = PhaseTimer(sample_every=4)
+    for step in range(1, 9):
+        t = timer.begin_step(step)
+        if timer._sampling:  # a sampled step: 1 s of forces, 3 s of pressure solve
+            t = timer.lap("forces and kick", t - 1.0)
+            timer.lap("pressure solve", t - 3.0)
+        else:
+            timer.lap("kick-drift", t - 4.0)
+    timer.lap("output", timer.begin_output() - 2.0)
+    table = timer.table(steps=8)
+    assert table["total"]["sampled_steps"] == 2
+    assert table["total"]["seconds"] == pytest.approx(34.0, abs=1e-3)
+    assert table["forces and kick"]["seconds"] == pytest.approx(8.0, abs=1e-2)
+    assert table["pressure solve"]["seconds"] == pytest.approx(24.0, abs=1e-2)
+    assert table["output"]["seconds"] == pytest.approx(2.0, abs=1e-3)
+    assert "kick-drift" not in table
+
+
 def test_run_json_profile_accounts_for_the_wall_time(tmp_path):
     out = tmp_path / "impact"
     result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render"])

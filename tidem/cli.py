@@ -232,6 +232,8 @@ def bench(
     warmup: Annotated[int, typer.Option(help="With --profile: untimed steps first (compiles every kernel)")] = 200,
     resume: Annotated[Optional[Path], typer.Option(help="With --profile: start from the checkpoint of this run "
                                                    "folder (e.g. a bubbling bed rather than its first steps)")] = None,
+    fused: Annotated[bool, typer.Option("--fused", help="With --profile: the contact passes and the kick in one "
+                                        "launch, as a run takes them (default: apart, to tell them apart)")] = False,
     set_: Sets = None,
 ):
     """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history),
@@ -239,7 +241,7 @@ def bench(
     if arch not in ("cpu", "cuda", "vulkan"):
         fail(f"--arch {arch}: choose cpu, cuda or vulkan", 2)
     if profile is not None:
-        _profile(profile, set_, steps, warmup, threads, out, resume, arch)
+        _profile(profile, set_, steps, warmup, threads, out, resume, arch, fused)
         return
     try:
         counts = [int(v) for v in (sizes or ("2000,20000" if render else "10000,50000,200000")).split(",")]
@@ -266,7 +268,7 @@ def bench(
 
 
 def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, threads: int, out: Optional[Path],
-             resume: Optional[Path], arch: str) -> None:
+             resume: Optional[Path], arch: str, fused: bool = False) -> None:
     """`tidem bench --profile`: a scene's steps timed by phase (`tidem.bench.profile_scene`)."""
     import json
 
@@ -288,7 +290,7 @@ def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, thre
         except InputError as exc:
             fail(str(exc), 2)
     try:
-        result = profile_scene(loaded, steps, warmup, model, start)
+        result = profile_scene(loaded, steps, warmup, model, start, split=not fused)
     except SceneError as exc:
         fail(exc.render(), 2)
     except RunError as exc:

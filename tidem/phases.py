@@ -6,7 +6,13 @@ since the previous lap and returns the new start. On the CPU backend a Taichi ke
 once it has finished, so the pair of clock reads (about 0.1 us) is the whole cost and the
 timer is always on. On a GPU backend kernels run asynchronously: `sync=True` waits for the
 device at every phase edge (exact, but it removes the overlap of host and device), so the
-run loop enables it only for `tidem bench --profile`.
+run loop enables it only for `tidem bench --profile`. A run on a GPU samples instead
+(`sample_every`): one step in SAMPLE_EVERY waits for the device at every phase edge, and the
+step's wall time of all steps is shared out among its phases as those sampled steps share it,
+so that each phase is booked where its work is done rather than where the host next waited
+(the largest-displacement read of every step, which otherwise books the previous step's
+forces under "kick-drift"). Output waits for the device before it starts and books only its
+own time.
 """
 
 from __future__ import annotations
@@ -15,7 +21,8 @@ import time
 
 import taichi as ti
 
-# "kick-drift": the first half kick and the drift; "contact forces": the two passes in which each
+# "kick-drift": the first half kick and the drift; "storage sort": the particles re-sorted into cell
+# order before every numerics.sort_interval-th neighbour build (`tidem.storage_order`); "contact forces": the two passes in which each
 # pair's owner evaluates the contact for both particles (and the walls and tubes); "kick": the
 # second half kick, which in scenes without reactions also adds the gas forces, and between
 # outputs the next step's kick-drift (one kernel,
@@ -23,35 +30,82 @@ import taichi as ti
 # kick": the two in one kernel launch, as a run without reactions takes them (`tidem bench
 # --profile` runs them as kernels of their own to tell them apart); "gas coupling": voidage, drag and heat
 # exchange coefficients at each gas step (and the gas forces, with reactions).
-PHASES = ("kick-drift", "neighbour build", "contact forces", "gas coupling", "gas flow", "pressure solve",
+PHASES = ("kick-drift", "storage sort", "neighbour build", "contact forces", "gas coupling", "gas flow", "pressure solve",
           "reactions", "inflow and outflow", "kick", "forces and kick", "checks", "output")
 clock = time.perf_counter
 
 
-class PhaseTimer:
-    """Accumulated seconds per phase (PHASES) since construction or `reset()`."""
+SAMPLE_EVERY = 16  # a GPU run's sampled steps: the waits (~20 us each) cost under 1 % of a step
+STEP_PHASES = tuple(p for p in PHASES if p != "output")
 
-    def __init__(self, sync: bool = False):
+
+class PhaseTimer:
+    """Accumulated seconds per phase (PHASES) since construction or `reset()`; with `sync` every
+    phase edge waits for the device, with `sample_every` > 0 one step in that many (module
+    docstring)."""
+
+    def __init__(self, sync: bool = False, sample_every: int = 0):
         self.sync = sync
+        self.sample_every = sample_every
         self.reset()
 
     def reset(self) -> None:
         self.seconds = dict.fromkeys(PHASES, 0.0)
+        self.sampled = dict.fromkeys(PHASES, 0.0)  # the sampled steps' phases, each waited for
+        self.sampled_steps = 0
+        self._sampling = False
+
+    def begin_step(self, step: int) -> float:
+        """The start of step number `step`: a sampled one first waits for the work in flight (booked
+        with the steps' phases); returns the step's start."""
+        self._sampling = bool(self.sample_every) and step % self.sample_every == 0
+        if self._sampling:
+            start = clock()
+            ti.sync()
+            self.seconds["kick-drift"] += clock() - start  # the last step's work: shared out in table()
+            self.sampled_steps += 1
+        return clock()
+
+    def begin_output(self) -> float:
+        """The start of output in a sampled run: waits for the steps' work in flight first (booked with
+        them), so that output books its own time only."""
+        if self.sample_every:
+            start = clock()
+            ti.sync()
+            self.seconds["kick-drift"] += clock() - start
+        return clock()
 
     def lap(self, phase: str, start: float) -> float:
         """Book the time since `start` to `phase`; returns now (the next phase's start)."""
-        if self.sync:
+        if self.sync or self._sampling:
             ti.sync()
         now = clock()
         self.seconds[phase] += now - start
+        if self._sampling:
+            self.sampled[phase] += now - start
         return now
 
+    def booked(self) -> dict:
+        """Seconds per phase; with sampling the steps' phases' total shared out as the sampled steps
+        share theirs (module docstring)."""
+        sampled = sum(self.sampled[p] for p in STEP_PHASES)
+        if not self.sampled_steps or sampled <= 0.0:
+            return dict(self.seconds)
+        steps_total = sum(self.seconds[p] for p in STEP_PHASES)
+        out = {p: steps_total * self.sampled[p] / sampled for p in STEP_PHASES}
+        out["output"] = self.seconds["output"]
+        return {p: out[p] for p in PHASES}
+
     def table(self, steps: int) -> dict:
-        """{phase: {seconds, ms_per_step, share}} of the phases that took any time, plus the total."""
-        total = sum(self.seconds.values())
+        """{phase: {seconds, ms_per_step, share}} of the phases that took any time, plus the total
+        (with `sampled_steps` where the profile was sampled)."""
+        seconds = self.booked()
+        total = sum(seconds.values())
         rows = {name: {"seconds": s, "ms_per_step": 1e3 * s / max(steps, 1), "share": s / total if total else 0.0}
-                for name, s in self.seconds.items() if s > 0.0}
+                for name, s in seconds.items() if s > 0.0}
         rows["total"] = {"seconds": total, "ms_per_step": 1e3 * total / max(steps, 1), "share": 1.0}
+        if self.sampled_steps:
+            rows["total"]["sampled_steps"] = self.sampled_steps
         return rows
 
 

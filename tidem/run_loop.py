@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import taichi as ti
 
 from tidem import checkpoint
 from tidem.averaging import AverageRecorder, write_averages
@@ -24,7 +25,7 @@ from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.model import Model
 from tidem.output_size import cadence
-from tidem.phases import clock
+from tidem.phases import SAMPLE_EVERY, clock
 from tidem.render.plots import read_series
 from tidem.reaction_output import ReactionLog
 from tidem.reactions import reaction_summary
@@ -263,7 +264,9 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         checkpoint.save(out.dir, solver, state, model.loaded.raw)
 
     solver.timer.reset()
+    solver.timer.sample_every = 0 if ti.lang.impl.current_cfg().arch == ti.cpu else SAMPLE_EVERY  # phases.py
     lap, steps0 = solver.timer.lap, solver.steps
+    begin_output = solver.timer.begin_output
     bar = RunProgress(enabled=progress, t_end=t_end, particles=int(model.active0.sum()) or model.capacity)
     last_ckpt = time.perf_counter()
     in_step = False
@@ -278,7 +281,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     try:
         with bar, stop:
             while True:
-                start = clock()
+                start = begin_output()
                 if solver.t >= next_series - 1e-12 * t_end:
                     out.sample(solver)
                     last_sample_t = solver.t
@@ -300,7 +303,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                 in_step = True
                 solver.advance(solver.steps_until(output_due, 50, total_steps))
                 in_step = False
-                start = clock()
+                start = begin_output()
                 if solver.steps % 50 == 0 or solver.steps == total_steps:
                     bar.update(solver.t, solver.steps, time.perf_counter() - t0)
                 if stop.signal is not None:
@@ -312,7 +315,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     if ckpt_every:
                         next_ckpt = _next_after(solver.t, ckpt_every)
                 lap("output", start)
-            start = clock()
+            start = begin_output()
             solver.check()
             save_checkpoint()
             lap("output", start)

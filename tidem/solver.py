@@ -31,7 +31,9 @@ from tidem.kernels.contact import make_force_kernel
 from tidem.kernels.diagnostics import make_energy_kernel
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.mesh_contact import make_mesh_mover
+from tidem.kernels.ordered import in_order
 from tidem.kernels.outlet import make_recycle_kernel, make_sink_kernel
+from tidem.kernels.storage_sort import make_storage_permuter
 from tidem.gas import GasError, GasPhase
 from tidem.mesh_bins import MESH_SLOTS, bin_triangles
 from tidem.model import Model
@@ -39,7 +41,7 @@ from tidem.phases import PhaseTimer, clock
 from tidem.pour import Pourer
 from tidem.runtime import hot
 from tidem.state import State, allocate, load_bins
-from tidem.storage_order import SORT_MIN_PARTICLES, sort_storage
+from tidem.storage_order import SCRATCH, SORT_MIN_PARTICLES, sort_storage
 from tidem.surfaces import is_heated
 
 
@@ -123,6 +125,10 @@ class Solver:
         # order, and so do small ones, which fit in cache whatever their order
         sortable = f.contacts and self.n >= SORT_MIN_PARTICLES and not (model.pours or f.reactions or f.contact_time)
         self._sort_every = model.scene.numerics.sort_interval if sortable else 0
+        self._permute = None  # a GPU sorts on the device (kernels/storage_sort.py), the CPU on the host
+        if self._sort_every and not in_order():
+            self._permute = make_storage_permuter(self.state, [
+                name for name in self.state.particle_fields if name not in SCRATCH])
         self.start()
 
     def _build_contacts(self):
@@ -135,11 +141,13 @@ class Solver:
                                    f.contacts, f.radiation, f.foil, f.wall_foil, static_surfaces(model) if f.contacts else 0,
                                    model.skin + model.heat_reach, model.grain_scale, uniform=model.uniform_particles(),
                                    quiet_margin=quiet_margin(model), meshes=mesh_settings(model))
-        self._rebuild = None
+        self._rebuild = self._cell_order = None
         if f.contacts:  # one launch: the list, then the surfaces in reach (culling), then the meshes' triangles
             after = tuple(fn for fn in (forces.mark_near, forces.list_meshes) if fn is not None)
-            self._rebuild = hot(make_neighbor_builder(model.grid, model.max_neighbors, model.skin + model.heat_reach,
-                                                      f.rolling, f.hysteretic, S, f.growth, after, model.uniform_particles()))
+            rebuild, self._cell_order = make_neighbor_builder(
+                model.grid, model.max_neighbors, model.skin + model.heat_reach, f.rolling, f.hysteretic, S, f.growth,
+                after, model.uniform_particles())
+            self._rebuild = hot(rebuild)
         return forces
 
     def _build_integrators(self, forces) -> None:
@@ -221,7 +229,7 @@ class Solver:
         check; `kernels/contact.py`)."""
         dt = self.dt
         lap = self.timer.lap
-        t = clock()
+        t = self.timer.begin_step(self.steps + 1)
         if not self._drift_done:
             self._kick_drift(self.n, dt)
         self.t += dt
@@ -238,8 +246,7 @@ class Solver:
             need |= self.pourer.insert(self.t) > 0
         t = lap("inflow and outflow", t)
         if need:
-            self.rebuild()
-            t = lap("neighbour build", t)
+            t = lap("neighbour build", self.rebuild(t))
         if self.gas is not None and self.steps % self.gas.interval == 0:
             self._gas_step()
             t = clock()
@@ -283,10 +290,11 @@ class Solver:
         t0 = self.mesh_t_build if since is None else since
         return max(m.displacement_bound(t0, self.t) for m in self.model.meshes)
 
-    def rebuild(self) -> None:
+    def rebuild(self, start: float | None = None) -> float | None:
         """Neighbour list (none with contact.model = 'none'); every numerics.sort_interval
-        rebuilds the storage is first re-sorted into cell order (`tidem.storage_order`). Moving
-        meshes are binned anew where they are now (`tidem.mesh_bins`)."""
+        rebuilds the storage is first re-sorted into cell order (`tidem.storage_order`), booked as
+        "storage sort" from `start` where given (returns the next phase's start). Moving meshes
+        are binned anew where they are now (`tidem.mesh_bins`)."""
         if self._move_meshes is not None:
             tab = self.model.mesh_table
             if self._meshes_moved(self.mesh_t_binned) > tab.margin - 0.5 * self.model.skin:
@@ -299,9 +307,16 @@ class Solver:
             self.mesh_t_build = self.t
         if self._rebuild is not None:
             if self._sort_every and self.rebuilds % self._sort_every == 0:
-                sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
+                if self._permute is not None:
+                    self._cell_order(self.n)
+                    self._permute(self.n)
+                else:
+                    sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
+                if start is not None:
+                    start = self.timer.lap("storage sort", start)
             self._rebuild(self.n)
             self.rebuilds += 1
+        return start
 
     def _gas_step(self) -> None:
         try:

@@ -61,6 +61,7 @@ import taichi as ti
 
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.averaging import channels
+from tidem.kernels.broadphase import scan_blocks
 from tidem.kernels.geometry import slab_layout
 from tidem.mesh_bins import MESH_SLOTS
 from tidem.model import Model
@@ -183,6 +184,7 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     nc = model.grid.n_cells
     for name in ("cell_count", "cell_start", "cell_fill"):
         p.place((nc,), name, ti.i32)
+    p.place((scan_blocks(nc),), "cell_block", ti.i32)  # the prefix sum's block offsets (kernels/broadphase.py)
     P = model.pair_params.shape[0]
     p.place((P, P), "pp", n=cl.N_PARAMS)
     p.place((P, model.surface_params.shape[1]), "ps", n=cl.N_PARAMS)
@@ -192,7 +194,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_r")
     p.S.max_disp = ti.field(p.fp)
     p.S.flips = ti.field(ti.i32)
-    p.fb.place(p.S.max_disp, p.S.flips)
+    p.S.sort_tail = ti.field(ti.i32)  # a GPU storage sort's count of the particles in order so far
+    p.fb.place(p.S.max_disp, p.S.flips, p.S.sort_tail)
     p.place((3,), "slab_next", ti.i32)  # the contact passes' slab counters (kernels/contact.py)
     if feat.n_meshes:
         _place_mesh_fields(p, model)
