@@ -23,8 +23,8 @@ mkdir -p "$out" "$runs"
 log=$out/run_loop.log
 scene=${SCENE:-lab_fluidized_bundle}  # SCENE=fluidized_tube ARCH=cpu tries the script without a GPU
 sets=(--set "particles[0].coarse_grain=1" --set output.interval=0.02)
-after=(env PYTHONPATH="$PWD" python3 -P -m tidem)
-before=(env PYTHONPATH="$(cd "$base" && pwd)" python3 -P -m tidem)
+after=(env PYTHONPATH="$PWD:${PYTHONPATH:-}" python3 -P -m tidem)
+before=(env PYTHONPATH="$(cd "$base" && pwd):${PYTHONPATH:-}" python3 -P -m tidem)
 step() {  # step NAME SECONDS COMMAND...: run with a time limit (SIGTERM), append to the log
     local name=$1 limit=$2
     shift 2
