@@ -11,7 +11,7 @@
 # 2. after / before: each tree resumes a copy of that checkpoint for 0.05 s of bed time (run.json:
 #    particle-steps/s and the run's sampled profile);
 # 3. profile: `tidem bench --profile --fused --resume` of the same checkpoint, every phase edge waited
-#    for (the synchronised profile that the run's profile is compared with).
+#    for (the synchronised profile that the run's profile is compared with; PROFILE_S=0 leaves it out).
 set -u
 out=${1:?usage: gpu_run_loop.sh OUT BASE [DEVELOP_S]}
 base=${2:?usage: gpu_run_loop.sh OUT BASE [DEVELOP_S]}
@@ -49,7 +49,7 @@ cp "$runs/dev/run.json" "$out/after.run.json" 2>/dev/null
 step before ${BEFORE_S:-170} "${before[@]}" scene $scene --arch "$arch" "${sets[@]}" --resume "$runs/before" --t-end "$t1" \
     --no-render --quiet
 cp "$runs/before/run.json" "$out/before.run.json" 2>/dev/null
-step profile 100 "${after[@]}" bench --arch "$arch" --profile $scene "${sets[@]}" --resume "$runs/prof" --fused \
+[ "${PROFILE_S:-100}" -gt 0 ] && step profile "${PROFILE_S:-100}" "${after[@]}" bench --arch "$arch" --profile $scene "${sets[@]}" --resume "$runs/prof" --fused \
     --steps 1000 --warmup 100 --out "$out/profile.json"
 python3 - "$out" <<'EOF'
 import json, sys

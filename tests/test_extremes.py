@@ -174,3 +174,33 @@ def test_float64_gas_runs_are_bit_identical():
         s.release()
     for a, b in zip(*finals):
         assert np.array_equal(a, b)
+
+
+def test_the_health_check_names_the_first_bad_particle_and_the_worst_overlap(solver_for):
+    """The health check's reductions run on the device (`kernels/diagnostics.py`): a NaN position is
+    reported for the first active particle that has one (by scene index), an inactive one is not;
+    an overlap above numerics.max_overlap names the particle with the largest, and its ratio."""
+    from tidem.solver import RunError
+
+    s = solver_for(cluster(0.002, 2e8, 0.5, 0.5))
+    S = s.state
+    s.check()  # a healthy start
+    ident = S.ident.to_numpy()
+    x = S.x.to_numpy()
+    active = S.active.to_numpy()
+    x[[1, 2]] = np.nan
+    active[1] = 0
+    S.x.from_numpy(x)
+    S.active.from_numpy(active)
+    with pytest.raises(RunError, match=f"particle {ident[2]} has a non-finite position"):
+        s.check()
+    x[[1, 2]] = 0.01
+    S.x.from_numpy(x)
+    ovl = np.zeros_like(S.ovl.to_numpy())
+    ovl[[0, 3]] = [0.02, 0.2]
+    S.ovl.from_numpy(ovl)
+    limit = s.model.scene.numerics.max_overlap
+    assert 0.02 < limit < 0.2
+    with pytest.raises(RunError, match=f"particle {ident[3]} overlaps a neighbour or wall by 20.0 %"):
+        s.check()
+    assert s.health() == (s.n, 3, pytest.approx(0.2))

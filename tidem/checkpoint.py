@@ -35,7 +35,8 @@ RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtim
 # build): not kept. The quiet partners' gaps (nbr_touch, nbr_gap) are not kept either: a restored run
 # evaluates every listed pair until its next build, which gives the same bits (kernels/contact.py).
 TRANSIENT = ("conduct", "gas_book", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
-             "cell_count", "cell_start", "cell_fill", "cell_block", "sort_tail", "pcell", "sorted_idx", "sums", "nbr_touch",
+             "cell_count", "cell_start", "cell_fill", "cell_block", "sort_tail", "pcell", "sorted_idx", "sums", "worst", "worst_at",
+             "nbr_touch",
              "nbr_gap")
 
 

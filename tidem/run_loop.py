@@ -9,6 +9,7 @@ import math
 import signal
 import threading
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -32,6 +33,9 @@ from tidem.reactions import reaction_summary
 from tidem.run_summary import observed, summary
 from tidem.run_tables import alpha_profile, tube_alpha_columns
 from tidem.solver import RunError, Solver
+
+
+WRITES_AHEAD = 2  # snapshots the writer thread may be behind the run loop (each held in memory meanwhile)
 
 
 @dataclass
@@ -77,6 +81,8 @@ class Output:
             else:
                 (self.dir / pvd).unlink(missing_ok=True)
         self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
+        self._writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tidem-snapshots")
+        self._pending: list[Future] = []
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
         # the column bed_height_m: the bed_height observable's height at each sample
         self.bed_height = model.features.gas or "bed_height" in model.scene.observables
@@ -88,8 +94,11 @@ class Output:
                                          loop.get("averages") if loop else None)
                          if model.features.averaging else None)
 
-    def snapshot(self, solver: Solver) -> Path:
-        """Write the next snapshot and list it in snapshots.pvd; returns its file."""
+    def snapshot(self, solver: Solver, on_written: Callable[[Path], None] | None = None) -> Path:
+        """Write the next snapshot and list it in snapshots.pvd; returns its file. The particles and
+        the gas are copied from the solver here; the files are written by the writer thread while the
+        next steps run (at most WRITES_AHEAD snapshots behind; `flush` waits for them), which then
+        calls `on_written` with the file."""
         S = solver.state
         active = S.active.to_numpy().astype(bool)
         idx = np.flatnonzero(active)
@@ -98,23 +107,50 @@ class Output:
         extra = {"temperature": S.T.to_numpy()[idx]} if self.model.features.heat else {}
         if self.model.features.coarse_grain:
             extra["grains"] = self.model.coarse_grain[ident] ** 3  # grains a parcel stands for (k^3)
-        write_vtp(self.snap_dir / name, S.x.to_numpy()[idx], {**extra,
+        t = solver.t
+        points, point_data = S.x.to_numpy()[idx], {**extra,
             "radius": S.radius.to_numpy()[idx],
             "velocity": S.v.to_numpy()[idx],
             "omega": S.w.to_numpy()[idx],
             "id": ident.astype(np.int32),
             "group": self.model.group[ident].astype(np.int32),
             "contacts": S.ncontact.to_numpy()[idx].astype(np.int32),
-        }, time=solver.t)
-        self.entries.append((solver.t, f"snapshots/{name}"))
+        }
+        self.entries.append((t, f"snapshots/{name}"))
         self.meshes.snapshot()
+        gas = None
         if self.gas_dir is not None:
             gg = solver.gas.gg
-            write_vti(self.gas_dir / name.replace("snap_", "gas_").replace(".vtp", ".vti"), gg.lo, gg.h, gg.cells,
-                      solver.gas.cell_fields(), time=solver.t)
-            write_pvd(self.dir / "gas.pvd", self._gas_entries())
-        write_pvd(self.dir / "snapshots.pvd", self.entries)
-        return self.snap_dir / name
+            gas = (self.gas_dir / name.replace("snap_", "gas_").replace(".vtp", ".vti"), gg.lo, gg.h, gg.cells,
+                   solver.gas.cell_fields(), self._gas_entries())
+        entries, path = list(self.entries), self.snap_dir / name
+
+        def write() -> None:
+            write_vtp(path, points, point_data, time=t)
+            if gas is not None:
+                write_vti(*gas[:5], time=t)
+                write_pvd(self.dir / "gas.pvd", gas[5])
+            write_pvd(self.dir / "snapshots.pvd", entries)
+            if on_written is not None:
+                on_written(path)
+
+        while len(self._pending) >= WRITES_AHEAD:
+            self._pending.pop(0).result()  # (raises the writer's error, e.g. a full disk)
+        self._pending.append(self._writer.submit(write))
+        return path
+
+    def flush(self) -> None:
+        """Wait until every snapshot handed to the writer thread is on disk (raises its error)."""
+        while self._pending:
+            self._pending.pop(0).result()
+
+    def close(self) -> None:
+        """Flush the snapshots and the time series, and stop the writer thread."""
+        try:
+            self.flush()
+        finally:
+            self._writer.shutdown()
+            self.series.close()
 
     def _gas_entries(self) -> list[tuple[float, str]]:
         """gas.pvd's rows: the gas file written with each snapshot (runs with [gas])."""
@@ -125,7 +161,7 @@ class Output:
     def sample(self, solver: Solver) -> None:
         row = {"time_s": solver.t, "step": solver.steps}
         row.update(solver.energies())
-        row["max_overlap_ratio"] = float(solver.state.ovl.to_numpy().max()) if solver.n else 0.0
+        row["max_overlap_ratio"] = solver.health()[2]
         if self.bed_height:
             active = solver.state.active.to_numpy().astype(bool)
             row["bed_height_m"] = bed_top(solver.state.x.to_numpy()[active, 2])
@@ -223,7 +259,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         if resume is not None:
             checkpoint.restore(solver, *resume)
     except (RunError, checkpoint.CheckpointError) as exc:
-        out.series.close()
+        out.close()
         data = summary(model, None, "failed", 0.0, str(exc))
         out.write_summary(data)
         return RunResult(status="failed", out_dir=Path(out_dir), steps=0, wall_s=0.0, message=str(exc), summary=data)
@@ -252,6 +288,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     from tidem.progress import RunProgress
 
     def save_checkpoint() -> None:
+        out.flush()  # every snapshot it lists on disk
         state = {"snap_dt": snap_dt, "series_dt": series_dt, "next_snap": next_snap, "next_series": next_series,
                  "entries": out.entries, "series_rows": out.series.rows, "last_sample_t": last_sample_t,
                  "output": output_table, "wall_s": wall_before + time.perf_counter() - t0}
@@ -287,10 +324,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     last_sample_t = solver.t
                     next_series += series_dt
                 if solver.t >= next_snap - 1e-12 * t_end:
-                    written = out.snapshot(solver)
+                    out.snapshot(solver, on_snapshot)
                     next_snap += snap_dt
-                    if on_snapshot is not None:
-                        on_snapshot(written)
                 if out.profiles is not None and out.profiles.due(solver.t):
                     out.profiles.record(solver)
                 if out.averages is not None and out.averages.due(solver.t):
@@ -329,7 +364,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             message += "; checkpoint written, continue with --resume"
     finally:
         start = clock()
-        out.series.close()
+        out.close()
         if model.angle_bins:
             out.write_alpha_profile(solver)
         if out.averages is not None:

@@ -28,7 +28,7 @@ from tidem.kernels.broadphase import make_neighbor_builder
 from tidem.kernels.contact_laws import LINEAR
 from tidem.kernels.reactions import make_reaction_kernel
 from tidem.kernels.contact import make_force_kernel
-from tidem.kernels.diagnostics import make_energy_kernel
+from tidem.kernels.diagnostics import make_energy_kernel, make_health_kernel
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.mesh_contact import make_mesh_mover
 from tidem.kernels.ordered import in_order
@@ -105,6 +105,7 @@ class Solver:
         self._build_integrators(forces)
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, self.state)
+        self._health = make_health_kernel(self.state)
         self._build_sources_and_sinks()
         self._move_meshes = None
         self.mesh_t_build = 0.0  # time of the last neighbour build, as the moving meshes' candidates see it
@@ -344,19 +345,14 @@ class Solver:
             raise RunError(
                 f"neighbour list: {over[2]} contacts that changed owner at a rebuild lost their history (more than "
                 f"{self.n} at once); lower numerics.skin")
-        x = S.x.to_numpy()
-        active = S.active.to_numpy().astype(bool)
-        bad = active & ~np.isfinite(x).all(axis=1)
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
+        i, worst_at, worst = self.health()
+        if i < self.n:
             raise RunError(f"particle {S.ident[i]} has a non-finite position at t = {self.t:.6g} s (step {self.steps}); "
                            "the time step is too large for the contact stiffness: lower numerics.dt_fraction")
-        ovl = S.ovl.to_numpy()
         limit = self.model.scene.numerics.max_overlap
-        if (ovl[active] > limit).any():
-            i = int(np.argmax(np.where(active, ovl, 0)))
+        if worst > limit:
             raise RunError(
-                f"particle {S.ident[i]} overlaps a neighbour or wall by {100 * ovl[i]:.1f} % of its radius at t = {self.t:.6g} s "
+                f"particle {S.ident[worst_at]} overlaps a neighbour or wall by {100 * worst:.1f} % of its radius at t = {self.t:.6g} s "
                 f"(limit {100 * limit:.0f} %): the contacts are too soft or too fast for this step; raise "
                 "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
 
@@ -367,6 +363,13 @@ class Solver:
             return {}
         mass, count = self.state.sink_sum.to_numpy()
         return dict(discharged_mass_kg=float(mass), discharged_particles=int(count))
+
+    def health(self) -> tuple[int, int, float]:
+        """(first active particle with a non-finite position, or n; first with the largest overlap
+        ratio; that ratio), reduced on the device (`kernels/diagnostics.py`)."""
+        self._health(self.n)
+        bad, worst_at = (int(v) for v in self.state.worst_at.to_numpy())
+        return bad, worst_at, float(self.state.worst.to_numpy()[0])
 
     def energies(self) -> dict:
         """Kinetic, rotational and potential energy [J], contacts per particle, active count."""

@@ -307,6 +307,8 @@ def allocate(model: Model) -> State:
     if feat.sink or feat.recycle:
         p.place((2,), "sink_sum", ti.f64)  # mass [kg] and number of the particles through the outlet (kernels/outlet.py)
     p.place((5,), "sums")
+    p.place((1,), "worst")  # the health check's largest overlap ratio (kernels/diagnostics.py)
+    p.place((2,), "worst_at", ti.i32)  # first non-finite position, largest overlap (storage indices)
     S._tree = p.fb.finalize()
     _fill_particles(S, model)
     if feat.heat:
