@@ -18,18 +18,7 @@ mkdir -p "$out" "$runs"
 log=$out/gpu_check.log
 tidem=(python3 -P -m tidem)
 cores=$(nproc)
-step() {  # step NAME SECONDS COMMAND...: run with a time limit, append to the log, print the output's tail
-    local name=$1 limit=$2
-    shift 2
-    local t0=$SECONDS
-    echo "== $name: $*" >>"$log"
-    timeout "$limit" "$@" >"$runs/$name.log" 2>&1
-    local rc=$?
-    cat "$runs/$name.log" >>"$log"
-    echo "== $name: rc $rc, $((SECONDS - t0)) s" | tee -a "$log"
-    tail -n 12 "$runs/$name.log"
-    return $rc
-}
+source "$(dirname "$0")/step.sh"
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader 2>&1 | tee -a "$log"
 step peer10k 60 "${tidem[@]}" bench --arch "$arch" --sizes 10000 --precision float64 --out "$out/peer10k.json"
 grep -q particle_steps_per_s "$out/peer10k.json" 2>/dev/null || { echo "$arch does not run the peer bed; stopping"; exit 1; }

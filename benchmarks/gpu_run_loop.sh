@@ -25,17 +25,8 @@ scene=${SCENE:-lab_fluidized_bundle}  # SCENE=fluidized_tube ARCH=cpu tries the 
 sets=(--set "particles[0].coarse_grain=1" --set output.interval=0.02)
 after=(env PYTHONPATH="$PWD:${PYTHONPATH:-}" python3 -P -m tidem)
 before=(env PYTHONPATH="$(cd "$base" && pwd):${PYTHONPATH:-}" python3 -P -m tidem)
-step() {  # step NAME SECONDS COMMAND...: run with a time limit (SIGTERM), append to the log
-    local name=$1 limit=$2
-    shift 2
-    local t0=$SECONDS
-    echo "== $name: $*" >>"$log"
-    timeout "$limit" "$@" >"$runs/$name.log" 2>&1
-    local rc=$?
-    cat "$runs/$name.log" >>"$log"
-    echo "== $name: rc $rc, $((SECONDS - t0)) s" | tee -a "$log"
-    tail -n 4 "$runs/$name.log"
-}
+source "$(dirname "$0")/step.sh"
+STEP_TAIL=4
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader 2>&1 | tee -a "$log"
 step develop "$develop" "${after[@]}" scene $scene --arch "$arch" "${sets[@]}" --t-end 0.25 --no-render --quiet \
     --out "$runs/dev"

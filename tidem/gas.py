@@ -30,6 +30,11 @@ from tidem.phases import PhaseTimer, clock
 from tidem.species import M_O2, o2_mass_fraction
 
 
+def probe_column(z: float) -> str:
+    """The time-series column of a pressure probe at height z [m], e.g. gas_pressure_z45mm_Pa."""
+    return f"gas_pressure_z{1000 * z:g}mm_Pa"
+
+
 class GasError(RuntimeError):
     """The gas step cannot go on stably; the message names the setting to change."""
 
@@ -181,9 +186,31 @@ class GasPhase:
         face = p - 0.5 * self.gg.h[2] * gp
         return float(face[open_].mean())
 
+    def probe_pressures(self) -> dict[str, float]:
+        """{probe_column(z): pressure [Pa]} of each height z in gas.pressure_probes: the mean over the
+        fluid cells of a horizontal layer, interpolated linearly between the two layers whose centres
+        bracket z (the lowest or highest layer beyond them); gauge, p = 0 at the outlet."""
+        if not self.gas.pressure_probes:
+            return {}
+        p = self.G.p.to_numpy()
+        fluid = self.solid == 0
+        nz, lo, h = self.gg.cells[2], self.gg.lo[2], self.gg.h[2]
+
+        def layer(k: int) -> float:
+            return float(p[:, :, k][fluid[:, :, k]].mean()) if fluid[:, :, k].any() else float("nan")
+
+        out = {}
+        for z in self.gas.pressure_probes:
+            s = min(max((z - lo) / h - 0.5, 0.0), nz - 1.0)  # in layer-centre units
+            k = min(int(s), nz - 2) if nz > 1 else 0
+            w = s - k
+            out[probe_column(z)] = layer(k) if w == 0.0 or nz == 1 else (1.0 - w) * layer(k) + w * layer(k + 1)
+        return out
+
     def summary(self) -> dict:
         out = dict(gas_pressure_drop_Pa=self.pressure_drop(), gas_cg_iterations=self.iterations,
                    gas_residual=self.residual, gas_divergence_per_s=self.divergence)
+        out.update(self.probe_pressures())
         if self.heat:
             T = self.G.T.to_numpy()[self.solid == 0]
             out["gas_T_mean_K"] = float(T.mean())

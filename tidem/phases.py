@@ -21,9 +21,10 @@ import time
 
 import taichi as ti
 
-# "kick-drift": the first half kick and the drift; "storage sort": the particles re-sorted into cell
-# order before every numerics.sort_interval-th neighbour build (`tidem.storage_order`); "contact forces": the two passes in which each
-# pair's owner evaluates the contact for both particles (and the walls and tubes); "kick": the
+# "kick-drift": the first half kick and the drift; "storage sort": the particles re-sorted into
+# cell order before every numerics.sort_interval-th neighbour build (`tidem.storage_order`);
+# "contact forces": the two passes in which each pair's owner evaluates the contact for both
+# particles (and the walls and tubes); "kick": the
 # second half kick, which in scenes without reactions also adds the gas forces, and between
 # outputs the next step's kick-drift (one kernel,
 # `tidem.solver`: "kick-drift" then counts only the first step after each output); "forces and

@@ -82,7 +82,7 @@ class Output:
                 (self.dir / pvd).unlink(missing_ok=True)
         self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
         self._writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tidem-snapshots")
-        self._pending: list[Future] = []
+        self._pending: list[tuple[Future, Path, Callable | None]] = []
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
         # the column bed_height_m: the bed_height observable's height at each sample
         self.bed_height = model.features.gas or "bed_height" in model.scene.observables
@@ -97,8 +97,9 @@ class Output:
     def snapshot(self, solver: Solver, on_written: Callable[[Path], None] | None = None) -> Path:
         """Write the next snapshot and list it in snapshots.pvd; returns its file. The particles and
         the gas are copied from the solver here; the files are written by the writer thread while the
-        next steps run (at most WRITES_AHEAD snapshots behind; `flush` waits for them), which then
-        calls `on_written` with the file."""
+        next steps run (at most WRITES_AHEAD snapshots behind; `flush` waits for them). `on_written`
+        is called with the file once it is on disk, in this thread (`poll`, `flush`): the background
+        renderer it starts dies with the thread that started it (PR_SET_PDEATHSIG)."""
         S = solver.state
         active = S.active.to_numpy().astype(bool)
         idx = np.flatnonzero(active)
@@ -131,18 +132,32 @@ class Output:
                 write_vti(*gas[:5], time=t)
                 write_pvd(self.dir / "gas.pvd", gas[5])
             write_pvd(self.dir / "snapshots.pvd", entries)
-            if on_written is not None:
-                on_written(path)
 
         while len(self._pending) >= WRITES_AHEAD:
-            self._pending.pop(0).result()  # (raises the writer's error, e.g. a full disk)
-        self._pending.append(self._writer.submit(write))
+            self._done(wait=True)
+        self._pending.append((self._writer.submit(write), path, on_written))
         return path
+
+    def _done(self, wait: bool) -> bool:
+        """Finish the oldest snapshot handed to the writer (waiting for it with `wait`): raise its
+        error (e.g. a full disk) or call its `on_written`. False if there is none (or not yet)."""
+        if not self._pending or not (wait or self._pending[0][0].done()):
+            return False
+        future, path, on_written = self._pending.pop(0)
+        future.result()
+        if on_written is not None:
+            on_written(path)
+        return True
+
+    def poll(self) -> None:
+        """Finish the snapshots the writer thread has written so far (in order)."""
+        while self._done(wait=False):
+            pass
 
     def flush(self) -> None:
         """Wait until every snapshot handed to the writer thread is on disk (raises its error)."""
-        while self._pending:
-            self._pending.pop(0).result()
+        while self._done(wait=True):
+            pass
 
     def close(self) -> None:
         """Flush the snapshots and the time series, and stop the writer thread."""
@@ -339,6 +354,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                 solver.advance(solver.steps_until(output_due, 50, total_steps))
                 in_step = False
                 start = begin_output()
+                out.poll()
                 if solver.steps % 50 == 0 or solver.steps == total_steps:
                     bar.update(solver.t, solver.steps, time.perf_counter() - t0)
                 if stop.signal is not None:

@@ -291,10 +291,10 @@ class Solver:
         t0 = self.mesh_t_build if since is None else since
         return max(m.displacement_bound(t0, self.t) for m in self.model.meshes)
 
-    def rebuild(self, start: float | None = None) -> float | None:
+    def rebuild(self, phase_start: float | None = None) -> float | None:
         """Neighbour list (none with contact.model = 'none'); every numerics.sort_interval
         rebuilds the storage is first re-sorted into cell order (`tidem.storage_order`), booked as
-        "storage sort" from `start` where given (returns the next phase's start). Moving meshes
+        "storage sort" from `phase_start` where given (returns the next phase's start). Moving meshes
         are binned anew where they are now (`tidem.mesh_bins`)."""
         if self._move_meshes is not None:
             tab = self.model.mesh_table
@@ -313,11 +313,11 @@ class Solver:
                     self._permute(self.n)
                 else:
                     sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
-                if start is not None:
-                    start = self.timer.lap("storage sort", start)
+                if phase_start is not None:
+                    phase_start = self.timer.lap("storage sort", phase_start)
             self._rebuild(self.n)
             self.rebuilds += 1
-        return start
+        return phase_start
 
     def _gas_step(self) -> None:
         try:

@@ -24,7 +24,11 @@ skipped), flip_ft, flip_mr, flip_dmax [capacity] its buffer of the history of pa
 float32, every other field float64.
 Slabs (`kernels/geometry.py`, `slab_layout`): slab [capacity] (a particle's slab at the last
 build), slab_list (the particles of slab s, in index order, at slab_start[s] ..
-slab_start[s + 1] - 1), slab_fill (scratch of the build), slab_next (the contact passes' three slab counters).
+slab_start[s + 1] - 1; not built where the contact passes sweep no slabs, on a GPU), slab_fill
+(scratch of the build), slab_next (the contact passes' three slab counters). cell_block: the cell
+prefix sum's block offsets; sort_tail: a GPU storage sort's count (`kernels/broadphase.py`).
+worst, worst_at: the health check's largest overlap ratio and its particle, and the first
+non-finite position (`kernels/diagnostics.py`).
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
 into the bed [W]) and surf_energy (its time integral [J]); with angle bins around heated tubes

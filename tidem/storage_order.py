@@ -18,6 +18,10 @@ SORT_MIN_PARTICLES that neither pour nor react nor time contacts):
 
 The order depends on positions only, at fixed steps, so float64 runs stay deterministic and a
 resumed run bit-identical (the rebuild count, which times the sorts, is in the checkpoint).
+This is the CPU's sort. On a GPU the Solver sorts on the device instead (`kernels/storage_sort.py`:
+the broad phase's counting sort as the order, ties in the order its atomics give), since copying
+every particle field to the host and back at each sort made it the largest cost of a 700 000-grain
+run (`benchmarks/README.md`).
 """
 
 from __future__ import annotations

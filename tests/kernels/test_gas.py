@@ -52,6 +52,28 @@ def test_packed_bed_pressure_gradient_is_ergun(solver_for, u):
     assert s.gas.residual < 1e-8
 
 
+def test_pressure_probes_read_the_layer_means_and_the_ergun_gradient(solver_for):
+    """gas.pressure_probes: a probe on a layer's centre reads that layer's mean pressure, one between
+    two centres their linear interpolation, and two probes in the packed bed differ by Ergun's
+    gradient (plus the gas weight) over their distance; a height outside the domain is refused."""
+    from tidem.gas import probe_column
+
+    u = 0.3
+    s = solver_for(packed_column(u, pressure_probes=[0.006, 0.007, 0.018]))
+    for _ in range(20):
+        s.step()
+    probes = s.gas.summary()
+    p = s.gas.G.p.to_numpy().mean(axis=(0, 1))
+    eps = s.gas.G.eps.to_numpy().mean(axis=(0, 1))
+    assert list(probes).count(probe_column(0.006)) == 1 and probe_column(0.006) == "gas_pressure_z6mm_Pa"
+    assert probes[probe_column(0.006)] == pytest.approx(p[1], rel=1e-12)
+    assert probes[probe_column(0.007)] == pytest.approx(0.75 * p[1] + 0.25 * p[2], rel=1e-12)
+    drop = probes[probe_column(0.006)] - probes[probe_column(0.018)]
+    assert drop / 0.012 == pytest.approx(ergun_gradient(eps[1:5].mean(), u) + RHO_G * 9.81, rel=0.05)
+    with pytest.raises(SceneError, match=r"gas.pressure_probes\[1\]: height 0.05 m lies outside"):
+        solver_for(packed_column(u, pressure_probes=[0.01, 0.05]))
+
+
 def fluid_bed(inlet, t_ramp=0.0):
     """About 900 particles in a periodic slab; soft (2 MPa, overlaps up to 10 % allowed while
     the starting lattice collapses) and frictionless, so that the bed settles to a random

@@ -90,6 +90,10 @@ def gas_checks(scene: Scene) -> list[str]:
     if min(sizes) < 2 * dmax:
         errs.append(f"gas.cell_size: cells of {min(sizes):g} m are smaller than 2 particle diameters ({2 * dmax:g} m), "
                     f"so the voidage is not a local average; use cell_size >= {3 * dmax:g} (about 3 diameters)")
+    for i, z in enumerate(gas.pressure_probes):
+        if not dom.min[2] <= z <= dom.max[2]:
+            errs.append(f"gas.pressure_probes[{i}]: height {z:g} m lies outside the domain's z range "
+                        f"{dom.min[2]:g}..{dom.max[2]:g} m; give heights in the scene's coordinates")
     for i, nz in enumerate(gas.nozzles):
         for key, a in (("x", 0), ("y", 1)):
             r = getattr(nz, key)

@@ -56,6 +56,7 @@ class Gas(Strict):
     tolerance: Positive = 1e-8
     max_iterations: int = Field(default=2000, ge=1)
     min_voidage: Number = Field(default=0.3, gt=0, lt=1)
+    pressure_probes: list[Number] = []
     oxygen: Oxygen | None = None
 
 
