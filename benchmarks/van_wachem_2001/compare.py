@@ -11,9 +11,10 @@ peak-to-peak range of the relative pressure (the probe's pressure 45 mm above th
 less its time mean), and the voidage of the probe's cell layer (from the gas snapshots; reported,
 not judged: the records' voidage comes from light intensity). Prints a Markdown table and draws
 FIGURE: bed height and relative pressure over windows as long as the records, and the pressure
-spectra.
+spectra. T_STOP=SECONDS (environment) ends every run's window there.
 """
 
+import os
 import sys
 from pathlib import Path
 
@@ -24,6 +25,7 @@ sys.path.insert(0, str(HERE))
 from analyze import DT, find_peaks, gauss_smooth, load, resample  # noqa: E402
 
 T_START = 1.0  # s: the air is fully on at 0.3 s; the first slug and the bed's expansion are over by 1 s
+T_STOP = float(os.environ.get("T_STOP", "inf"))  # s: T_STOP=3.5 compares runs over one window
 PROBE_Z = 0.045
 SIGMA_S, PROMINENCE, MIN_SEP = 0.02, 0.15, 0.2
 
@@ -63,7 +65,7 @@ def probe_voidage(run: Path) -> float:
     values = []
     for path in sorted((run / "gas").glob("gas_*.vti")):
         grid, fields = read_vti(path)
-        if grid["time"] < T_START:
+        if not T_START <= grid["time"] <= T_STOP:
             continue
         k = int((PROBE_Z - grid["origin"][2]) / grid["spacing"][2])
         eps, solid = fields["voidage"], fields["solid"]
@@ -75,7 +77,7 @@ def read_run(run: Path):
     from tidem.render.plots import read_series
 
     s = read_series(run / "timeseries.csv")
-    keep = s["time_s"] >= T_START
+    keep = (s["time_s"] >= T_START) & (s["time_s"] <= T_STOP)
     return s["time_s"][keep], s["bed_height_m"][keep], s["gas_pressure_z45mm_Pa"][keep]
 
 
@@ -101,7 +103,7 @@ def main(figure: str, runs: list[str]) -> None:
         t, height, pressure = read_run(Path(path))
         rows.append((label or path, stats(t, height, pressure), probe_voidage(Path(path))))
         series.append((label or path, t, height, pressure))
-    print(f"window: records as digitised; runs from t = {T_START} s to their end")
+    print(f"window: records as digitised; runs from t = {T_START} s to {T_STOP} s or their end")
     print("| | bed height mean [5-95 %], mm | bed-height period, s | pressure period, s | pressure std, Pa | "
           "pressure peak-to-peak, Pa | voidage at 45 mm |")
     print("|---|---|---|---|---|---|---|")
