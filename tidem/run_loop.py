@@ -4,12 +4,10 @@ show progress, and keep every finished output on disk whatever happens (Ctrl-C, 
 
 from __future__ import annotations
 
-import json
 import math
 import signal
 import threading
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -18,24 +16,14 @@ import numpy as np
 import taichi as ti
 
 from tidem import checkpoint
-from tidem.averaging import AverageRecorder, write_averages
-from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
-from tidem.hydrodynamics import bed_top
-from tidem.io.mesh_output import MeshOutput
-from tidem.io.timeseries import TimeSeries
-from tidem.io.vtp import write_pvd, write_vti, write_vtp
+from tidem.averaging import write_averages
 from tidem.model import Model
-from tidem.output_size import cadence
 from tidem.phases import SAMPLE_EVERY, clock
+from tidem.output_size import cadence
 from tidem.render.plots import read_series
-from tidem.reaction_output import ReactionLog
-from tidem.reactions import reaction_summary
+from tidem.run_output import Output
 from tidem.run_summary import observed, summary
-from tidem.run_tables import alpha_profile, tube_alpha_columns
 from tidem.solver import RunError, Solver
-
-
-WRITES_AHEAD = 2  # snapshots the writer thread may be behind the run loop (each held in memory meanwhile)
 
 
 @dataclass
@@ -46,177 +34,6 @@ class RunResult:
     wall_s: float
     message: str = ""
     summary: dict = field(default_factory=dict)
-
-
-class Output:
-    """Snapshots (vtp + pvd), the mesh walls (meshes/ + meshes.pvd), timeseries.csv and run.json
-    of one run folder."""
-
-    def __init__(self, out_dir: Path, model: Model, loop: dict | None = None):
-        """A fresh run folder, or with `loop` (a checkpoint's run-loop state) the folder of the
-        run being resumed: its snapshots and time-series rows up to the checkpoint are kept,
-        anything written after it is dropped."""
-        self.dir = Path(out_dir)
-        self.snap_dir = self.dir / "snapshots"
-        self.snap_dir.mkdir(parents=True, exist_ok=True)
-        self.model = model
-        self.entries: list[tuple[float, str]] = [tuple(e) for e in loop["entries"]] if loop else []
-        self.gas_dir = self.dir / "gas" if model.features.gas else None
-        if self.gas_dir is not None:
-            self.gas_dir.mkdir(exist_ok=True)
-        folders = [self.dir, self.snap_dir] + ([self.gas_dir] if self.gas_dir is not None else [])
-        for half in [p for folder in folders for p in folder.glob("*.tmp")]:
-            half.unlink()  # half-written by a killed run (every file is written under .tmp, then renamed)
-        kept = {Path(name).name for _, name in self.entries}
-        for old in self.snap_dir.glob("*.vtp"):
-            if old.name not in kept:
-                old.unlink()
-        if self.gas_dir is not None:
-            for old in self.gas_dir.glob("*.vti"):
-                if old.name.replace("gas_", "snap_").replace(".vti", ".vtp") not in kept:
-                    old.unlink()
-        for pvd, entries in (("snapshots.pvd", self.entries), ("gas.pvd", self._gas_entries())):
-            if entries:
-                write_pvd(self.dir / pvd, entries)
-            else:
-                (self.dir / pvd).unlink(missing_ok=True)
-        self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
-        self._writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tidem-snapshots")
-        self._pending: list[tuple[Future, Path, Callable | None]] = []
-        self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
-        # the column bed_height_m: the bed_height observable's height at each sample
-        self.bed_height = model.features.gas or "bed_height" in model.scene.observables
-        self.reactions = (ReactionLog(self.dir, model, [tuple(r) for r in loop.get("reaction_rows", [])] if loop else None)
-                          if model.features.reactions else None)
-        self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
-                         if model.features.packed_bed_profiles else None)
-        self.averages = (AverageRecorder(model, cadence(model.scene, model.t_end)[1],
-                                         loop.get("averages") if loop else None)
-                         if model.features.averaging else None)
-
-    def snapshot(self, solver: Solver, on_written: Callable[[Path], None] | None = None) -> Path:
-        """Write the next snapshot and list it in snapshots.pvd; returns its file. The particles and
-        the gas are copied from the solver here; the files are written by the writer thread while the
-        next steps run (at most WRITES_AHEAD snapshots behind; `flush` waits for them). `on_written`
-        is called with the file once it is on disk, in this thread (`poll`, `flush`): the background
-        renderer it starts dies with the thread that started it (PR_SET_PDEATHSIG)."""
-        S = solver.state
-        active = S.active.to_numpy().astype(bool)
-        idx = np.flatnonzero(active)
-        ident = S.ident.to_numpy()[idx]  # index in the scene (storage is re-sorted as the bed flows)
-        name = f"snap_{len(self.entries):05d}.vtp"
-        extra = {"temperature": S.T.to_numpy()[idx]} if self.model.features.heat else {}
-        if self.model.features.coarse_grain:
-            extra["grains"] = self.model.coarse_grain[ident] ** 3  # grains a parcel stands for (k^3)
-        t = solver.t
-        points, point_data = S.x.to_numpy()[idx], {**extra,
-            "radius": S.radius.to_numpy()[idx],
-            "velocity": S.v.to_numpy()[idx],
-            "omega": S.w.to_numpy()[idx],
-            "id": ident.astype(np.int32),
-            "group": self.model.group[ident].astype(np.int32),
-            "contacts": S.ncontact.to_numpy()[idx].astype(np.int32),
-        }
-        self.entries.append((t, f"snapshots/{name}"))
-        self.meshes.snapshot()
-        gas = None
-        if self.gas_dir is not None:
-            gg = solver.gas.gg
-            gas = (self.gas_dir / name.replace("snap_", "gas_").replace(".vtp", ".vti"), gg.lo, gg.h, gg.cells,
-                   solver.gas.cell_fields(), self._gas_entries())
-        entries, path = list(self.entries), self.snap_dir / name
-
-        def write() -> None:
-            write_vtp(path, points, point_data, time=t)
-            if gas is not None:
-                write_vti(*gas[:5], time=t)
-                write_pvd(self.dir / "gas.pvd", gas[5])
-            write_pvd(self.dir / "snapshots.pvd", entries)
-
-        while len(self._pending) >= WRITES_AHEAD:
-            self._done(wait=True)
-        self._pending.append((self._writer.submit(write), path, on_written))
-        return path
-
-    def _done(self, wait: bool) -> bool:
-        """Finish the oldest snapshot handed to the writer (waiting for it with `wait`): raise its
-        error (e.g. a full disk) or call its `on_written`. False if there is none (or not yet)."""
-        if not self._pending or not (wait or self._pending[0][0].done()):
-            return False
-        future, path, on_written = self._pending.pop(0)
-        future.result()
-        if on_written is not None:
-            on_written(path)
-        return True
-
-    def poll(self) -> None:
-        """Finish the snapshots the writer thread has written so far (in order)."""
-        while self._done(wait=False):
-            pass
-
-    def flush(self) -> None:
-        """Wait until every snapshot handed to the writer thread is on disk (raises its error)."""
-        while self._done(wait=True):
-            pass
-
-    def close(self) -> None:
-        """Flush the snapshots and the time series, and stop the writer thread."""
-        try:
-            self.flush()
-        finally:
-            self._writer.shutdown()
-            self.series.close()
-
-    def _gas_entries(self) -> list[tuple[float, str]]:
-        """gas.pvd's rows: the gas file written with each snapshot (runs with [gas])."""
-        if self.gas_dir is None:
-            return []
-        return [(t, name.replace("snapshots/snap_", "gas/gas_").replace(".vtp", ".vti")) for t, name in self.entries]
-
-    def sample(self, solver: Solver) -> None:
-        row = {"time_s": solver.t, "step": solver.steps}
-        row.update(solver.energies())
-        row["max_overlap_ratio"] = solver.health()[2]
-        if self.bed_height:
-            active = solver.state.active.to_numpy().astype(bool)
-            row["bed_height_m"] = bed_top(solver.state.x.to_numpy()[active, 2])
-        row.update(solver.outlet_summary())
-        if self.model.features.heat:
-            row.update(solver.heat_summary())
-        if solver.gas is not None:
-            row.update(solver.gas.summary())
-        row.update(tube_alpha_columns(self.model, row))
-        if self.reactions is not None:
-            row.update(reaction_summary(solver))
-            self.reactions.sample(solver)
-        for p in self.model.planes:
-            if p["name"] == "outlet plate":
-                t0, t1 = p["t"]
-                row["plate_z_m"] = p["p0"][2] + p["vel"][2] * (min(max(solver.t, t0), t1) - t0)
-        self.series.append(row)
-
-    def write_alpha_profile(self, solver: Solver) -> None:
-        """alpha_profile.csv: tube, angle_deg (0 = top), alpha_W_m2K."""
-        rows, _ = alpha_profile(self.model, solver)
-        if rows:
-            lines = ["tube,angle_deg,alpha_W_m2K"] + [f"{r['tube']},{r['angle_deg']:.2f},{r['alpha_W_m2K']:.6g}" for r in rows]
-            (self.dir / "alpha_profile.csv").write_text("\n".join(lines) + "\n")
-
-    def write_bed_profiles(self, solver: Solver) -> dict | None:
-        """preheat_profiles.csv of the profiles recorded so far (`tidem.bed_profiles`); returns
-        their summary for run.json, or None without the packed_bed_profiles observable."""
-        if self.profiles is None:
-            return None
-        rows, result = profile_rows(self.model, solver, self.profiles)
-        if rows:
-            write_csv(self.dir / CSV_NAME, rows)
-        return result
-
-    def write_summary(self, data: dict) -> None:
-        path = self.dir / "run.json"
-        tmp = path.with_suffix(".json.tmp")
-        tmp.write_text(json.dumps(data, indent=2, default=float))
-        tmp.replace(path)
 
 
 class StopRequest:
