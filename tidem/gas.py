@@ -192,20 +192,12 @@ class GasPhase:
         bracket z (the lowest or highest layer beyond them); gauge, p = 0 at the outlet."""
         if not self.gas.pressure_probes:
             return {}
-        p = self.G.p.to_numpy()
         fluid = self.solid == 0
-        nz, lo, h = self.gg.cells[2], self.gg.lo[2], self.gg.h[2]
-
-        def layer(k: int) -> float:
-            return float(p[:, :, k][fluid[:, :, k]].mean()) if fluid[:, :, k].any() else float("nan")
-
-        out = {}
-        for z in self.gas.pressure_probes:
-            s = min(max((z - lo) / h - 0.5, 0.0), nz - 1.0)  # in layer-centre units
-            k = min(int(s), nz - 2) if nz > 1 else 0
-            w = s - k
-            out[probe_column(z)] = layer(k) if w == 0.0 or nz == 1 else (1.0 - w) * layer(k) + w * layer(k + 1)
-        return out
+        count = fluid.sum(axis=(0, 1))
+        total = np.where(fluid, self.G.p.to_numpy(), 0.0).sum(axis=(0, 1))
+        means = np.divide(total, count, out=np.full(len(count), np.nan), where=count > 0)
+        centres = self.gg.lo[2] + (np.arange(self.gg.cells[2]) + 0.5) * self.gg.h[2]
+        return {probe_column(z): float(np.interp(z, centres, means)) for z in self.gas.pressure_probes}
 
     def summary(self) -> dict:
         out = dict(gas_pressure_drop_Pa=self.pressure_drop(), gas_cg_iterations=self.iterations,

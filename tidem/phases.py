@@ -61,20 +61,22 @@ class PhaseTimer:
         with the steps' phases); returns the step's start."""
         self._sampling = bool(self.sample_every) and step % self.sample_every == 0
         if self._sampling:
-            start = clock()
-            ti.sync()
-            self.seconds["kick-drift"] += clock() - start  # the last step's work: shared out in table()
             self.sampled_steps += 1
+            return self._settle()
         return clock()
 
     def begin_output(self) -> float:
         """The start of output in a sampled run: waits for the steps' work in flight first (booked with
         them), so that output books its own time only."""
-        if self.sample_every:
-            start = clock()
-            ti.sync()
-            self.seconds["kick-drift"] += clock() - start
-        return clock()
+        return self._settle() if self.sample_every else clock()
+
+    def _settle(self) -> float:
+        """Wait for the work in flight, booked with the steps (shared out in `booked`); returns now."""
+        start = clock()
+        ti.sync()
+        now = clock()
+        self.seconds["kick-drift"] += now - start
+        return now
 
     def lap(self, phase: str, start: float) -> float:
         """Book the time since `start` to `phase`; returns now (the next phase's start)."""

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
+from tidem.kernel_settings import mesh_settings, quiet_margin, static_surfaces
 from tidem.kernels.averaging import make_averaging_kernel
 from tidem.kernels.broadphase import make_neighbor_builder
 from tidem.kernels.contact_laws import LINEAR
@@ -45,42 +46,8 @@ from tidem.storage_order import SCRATCH, SORT_MIN_PARTICLES, sort_storage
 from tidem.surfaces import is_heated
 
 
-QUIET_MARGIN = 1e-4  # of the skin: the rounding margin of the quiet partners' reach (kernels/contact.py)
-
-
-def quiet_margin(model: Model) -> float:
-    """The rounding margin [m] of the quiet partners' reach (`kernels/contact.py`): 1e-4 of the
-    skin, plus 16 rounding units of the largest coordinate in the kernels' float type."""
-    g = model.grid
-    largest = max(max(abs(lo), abs(lo + L)) for lo, L in zip(g.lo, g.length))
-    eps = np.finfo(np.float32 if model.features.float_bytes == 4 else np.float64).eps
-    return QUIET_MARGIN * model.skin + 16 * eps * largest
-
-
 class RunError(RuntimeError):
     """The simulation became invalid; the message names the particle or setting and the fix."""
-
-
-def mesh_settings(model: Model) -> tuple[int, int, int, float, float] | None:
-    """What the contact kernel needs of the mesh walls (`kernels/mesh_contact.py`): their number, the
-    candidate triangles and contact slots per particle, the tolerance [m] within which a closest
-    point lies on another triangle (1e-6 of the smallest radius plus 64 rounding units of the largest
-    coordinate), and how far beyond its radius a particle lists triangles [m] (`mesh_bins.mesh_table`);
-    None without meshes."""
-    if not model.features.n_meshes:
-        return None
-    g = model.grid
-    largest = max(max(abs(lo), abs(lo + L)) for lo, L in zip(g.lo, g.length))
-    eps = np.finfo(np.float32 if model.features.float_bytes == 4 else np.float64).eps
-    return (model.features.n_meshes, model.mesh_table.candidates, MESH_SLOTS,
-            1e-6 * float(model.radius.min()) + 64 * eps * largest, model.mesh_table.list_reach)
-
-
-def static_surfaces(model: Model) -> int:
-    """Bit s set for each surface (planes, then tubes) that never moves: the contact kernel skips it
-    for particles out of its reach at the last neighbour build."""
-    still = [not any(p["vel"]) for p in model.planes] + [True] * len(model.tubes)
-    return sum(1 << s for s, fixed in enumerate(still) if fixed)
 
 
 class Solver:
@@ -369,7 +336,7 @@ class Solver:
         ratio; that ratio), reduced on the device (`kernels/diagnostics.py`)."""
         self._health(self.n)
         bad, worst_at = (int(v) for v in self.state.worst_at.to_numpy())
-        return bad, worst_at, float(self.state.worst.to_numpy()[0])
+        return bad, worst_at, float(self.state.worst[None])
 
     def energies(self) -> dict:
         """Kinetic, rotational and potential energy [J], contacts per particle, active count."""

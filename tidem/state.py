@@ -199,7 +199,8 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.S.max_disp = ti.field(p.fp)
     p.S.flips = ti.field(ti.i32)
     p.S.sort_tail = ti.field(ti.i32)  # a GPU storage sort's count of the particles in order so far
-    p.fb.place(p.S.max_disp, p.S.flips, p.S.sort_tail)
+    p.S.worst = ti.field(p.fp)  # the health check's largest overlap ratio (kernels/diagnostics.py)
+    p.fb.place(p.S.max_disp, p.S.flips, p.S.sort_tail, p.S.worst)
     p.place((3,), "slab_next", ti.i32)  # the contact passes' slab counters (kernels/contact.py)
     if feat.n_meshes:
         _place_mesh_fields(p, model)
@@ -311,7 +312,6 @@ def allocate(model: Model) -> State:
     if feat.sink or feat.recycle:
         p.place((2,), "sink_sum", ti.f64)  # mass [kg] and number of the particles through the outlet (kernels/outlet.py)
     p.place((5,), "sums")
-    p.place((1,), "worst")  # the health check's largest overlap ratio (kernels/diagnostics.py)
     p.place((2,), "worst_at", ti.i32)  # first non-finite position, largest overlap (storage indices)
     S._tree = p.fb.finalize()
     _fill_particles(S, model)
