@@ -48,8 +48,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     times k^3 (K_p = k^3 K(eps, d_p/k, w), H_p = k^3 h(d_p/k) pi (d_p/k)^2; the per-grain
     closures of MFiX's CGDEM and CFDEM's coarse-grained models), which keeps the grains'
     terminal velocity, drag relaxation time and lumped heating time; the pressure-gradient
-    force and the voidage take the parcel's volume, k^3 grains' volume. With `cut_cells` (meshes in
-    the gas) the voidage is taken over each cell's open volume G.open."""
+    force and the voidage take the parcel's volume, k^3 grains' volume. With `cut_cells` (meshes or
+    tubes in the gas) the voidage is taken over each cell's open volume G.open."""
     cic, corner, weight = make_cic(gg)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)

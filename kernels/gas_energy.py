@@ -11,11 +11,20 @@ phi(r) = (r + |r|)/(1 + |r|), r = (T_down - T_up)/(T_up - T_far) (van Leer 1979;
 variation diminishing for Courant numbers up to 0.5, the limit the gas step enforces); T_far
 is the second cell upwind, the inlet temperature below the first cell, and where there is none
 (walls, the outlet) the face takes the upwind value (first order). Inlet faces carry T_in.
-with H_w = h_w eps A_w the convection from a heated tube over the tube area A_w the cell
-borders (`tube_convection`): h_w = Nu k_g / D, Churchill & Bernstein (1977) for a cylinder in
-cross flow, Nu = 0.3 + 0.62 Re^1/2 Pr^1/3 / [1 + (0.4/Pr)^2/3]^1/4 [1 + (Re/282000)^5/8]^4/5,
-Re = rho |u| D / mu at the cell's gas velocity. The heat each tube gives the gas is summed
-into wall_rate [W] and, over time, wall_energy [J].
+with H_w the convection from a heated tube over the tube area A_w the cell borders
+(`tube_convection`). "churchill_bernstein": H_w = h_cb eps A_w, h_cb = Nu k_g / D for a cylinder
+in cross flow (Churchill & Bernstein 1977),
+Nu = 0.3 + 0.62 Re^1/2 Pr^1/3 / [1 + (0.4/Pr)^2/3]^1/4 [1 + (Re/282000)^5/8]^4/5,
+Re = rho |u| D / mu at the cell's gas velocity. "martin_nilles": the cell is read as a share
+phi = min(1, (1 - eps) / (1 - EPS_PACKED)) of packed emulsion and 1 - phi of free gas,
+H_w = [phi h_pb + (1 - phi) h_cb] A_w, h_pb the flow term of a packed bed's wall coefficient,
+h_pb d / k_g = 0.19 Re_0^0.75 Pr^1/3, Re_0 = rho U_0 d / mu (Martin & Nilles 1993; d the
+grains' Sauter diameter): grains break the gas's boundary layer at the tube every diameter,
+which a bare cylinder's correlation (length D) misses. The emulsion's superficial velocity is
+the cell's, U_0 = eps |u|, up to the minimum fluidization velocity U_mf: a bubbling bed's
+emulsion stays near minimum fluidization and bubbles carry the excess (two-phase theory,
+Toomey & Johnstone 1952). The heat each tube gives the gas is
+summed into wall_rate [W] and, over time, wall_energy [J].
   (+ Qs / dt, heat handed back by particles that reacted away, with reactions).
 """
 
@@ -24,12 +33,17 @@ import taichi as ti
 from .gas_grid import CLOSED, INLET, INTERIOR
 from .ordered import in_order
 
+EPS_PACKED = 0.4  # voidage of the packed emulsion in the "martin_nilles" tube convection (Martin & Nilles' beds)
+
 
 def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: float, tube_walls: bool,
-                        k_gas: float, prandtl: float, sources: bool, conduction: bool) -> dict:
+                        k_gas: float, prandtl: float, sources: bool, conduction: bool, wall_grain: float = 0.0,
+                        wall_umf: float = 0.0) -> dict:
     """Return {"upwind", "interior_diffusion"} (Taichi funcs, also used by `species`) and with
     `heat` the kernel "energy", for gas grid `gg`, fields `G` and the grid's index functions
-    `index` (unit, cell_index, face_index, face_eps of `gas_flow.make_flow_kernels`)."""
+    `index` (unit, cell_index, face_index, face_eps of `gas_flow.make_flow_kernels`); `wall_grain`
+    > 0 (the grains' Sauter diameter [m]) takes the "martin_nilles" tube convection, its emulsion's
+    velocity capped at `wall_umf` [m/s]."""
     n = gg.cells
     per = gg.periodic
     h = ti.Vector(list(gg.h))
@@ -44,15 +58,23 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
 
     @ti.func
     def wall_conductance(I):
-        """H_w = h_w eps A_w [W/K] of a cell bordering a heated tube (Churchill-Bernstein)."""
+        """H_w [W/K] of a cell bordering a heated tube (module docstring)."""
         speed2 = 0.0
         for c in ti.static(range(3)):
             uc = 0.5 * (U[c][face_index(I, c)] + U[c][face_index(I + unit(c), c)])
             speed2 += uc * uc
+        speed = ti.sqrt(speed2)
         d = G.wall_D[I]
-        re = rho * ti.sqrt(speed2) * d / mu
-        nu_w = 0.3 + 0.62 * ti.sqrt(re) * pr3 / cb_denominator * (1.0 + (re / 282000.0) ** 0.625) ** 0.8
-        return nu_w * k_gas / d * G.eps[I] * G.wall_A[I]
+        re = rho * speed * d / mu
+        h_cb = (0.3 + 0.62 * ti.sqrt(re) * pr3 / cb_denominator * (1.0 + (re / 282000.0) ** 0.625) ** 0.8) * k_gas / d
+        eps = G.eps[I]
+        h = h_cb * eps
+        if ti.static(wall_grain > 0.0):
+            phi = ti.min(1.0, (1.0 - eps) / (1.0 - EPS_PACKED))
+            re0 = rho * ti.min(eps * speed, wall_umf) * wall_grain / mu
+            h_pb = 0.19 * re0 ** 0.75 * pr3 * k_gas / wall_grain
+            h = phi * h_pb + (1.0 - phi) * h_cb
+        return h * G.wall_A[I]
 
     @ti.func
     def muscl_face(F: ti.template(), f, c: ti.template(), f_in):

@@ -55,9 +55,12 @@ def cg_batch() -> int:
 
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
                       tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
-                      conduction: bool = False):
+                      conduction: bool = False, wall_grain: float = 0.0,
+                      wall_umf: float = 0.0):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas_fields`); `tube_walls`
-    adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy),
+    adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy;
+    with `wall_grain` > 0, the grains' diameter, the packed-bed term in the particle-filled share, its
+    velocity capped at `wall_umf`),
     `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
     `conduction` Fourier conduction through the gas."""
     cic, corner, weight = make_cic(gg)
@@ -361,5 +364,5 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                    correct=correct, divergence=divergence, courant=courant)
     index = SimpleNamespace(unit=unit, cell_index=cell_index, face_index=face_index, face_eps=face_eps)
     kernels.update(make_energy_kernels(gg, G, index, rho, mu, heat, rho_c, tube_walls, k_gas, prandtl, sources,
-                                       conduction))
+                                       conduction, wall_grain, wall_umf))
     return kernels

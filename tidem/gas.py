@@ -23,8 +23,10 @@ from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
 from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
+from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas_fields import allocate_gas_fields
-from tidem.gas_geometry import gas_grid, gas_walls, inlet_map, tube_walls
+from tidem.gas_mesh import MIN_OPEN
+from tidem.gas_geometry import gas_grid, gas_walls, inlet_map, tube_open_fraction, tube_walls
 from tidem.gas_limits import MAX_COURANT
 from tidem.phases import PhaseTimer, clock
 from tidem.species import M_O2, o2_mass_fraction
@@ -37,6 +39,16 @@ def probe_column(z: float) -> str:
 
 class GasError(RuntimeError):
     """The gas step cannot go on stably; the message names the setting to change."""
+
+
+def grain_sauter_diameter(model) -> float:
+    """Sauter mean diameter [m] of the scene's grains, sum d^3 / sum d^2 over every grain (a parcel
+    of coarse-graining factor k holds k^3 grains of its diameter / k): the length of the packed-bed
+    tube convection."""
+    k = np.ones_like(model.radius) if model.coarse_grain is None else model.coarse_grain
+    d = 2.0 * model.radius / k
+    n = k**3
+    return float((n * d**3).sum() / (n * d**2).sum())
 
 
 class GasPhase:
@@ -59,22 +71,31 @@ class GasPhase:
         self.inlet = inlet_map(gg, gas)
         walls = tube_walls(gg, model.tubes) if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
-        open_fraction = None if self.cut is None else self.cut.open_fraction
+        open_fraction = tube_open_fraction(gg, model.tubes, self.solid)
+        if self.cut is not None:
+            open_fraction = np.clip(self.cut.open_fraction * (1.0 if open_fraction is None else open_fraction),
+                                    MIN_OPEN, 1.0)
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes), self.heat,
                                                  self.sources, self.species, open_fraction)
         G = self.G
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
+        wall_grain, wall_umf = 0.0, 0.0
+        if self.walls and gas.tube_convection == "martin_nilles":
+            wall_grain = grain_sauter_diameter(model)
+            rho_p = float((model.mass).sum() / (4.0 / 3.0 * math.pi * model.radius**3).sum())
+            g = float(np.linalg.norm(model.gravity))  # no gravity: nothing fluidizes, no cap
+            wall_umf = wen_yu_minimum_fluidization(wall_grain, rho_p, gas.density, gas.viscosity, g) if g > 0 else 1e30
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
-                                      self.heat and gas.conduction)
+                                      self.heat and gas.conduction, wall_grain, wall_umf)
         self.serial_solve = serial_solve(self.solid.size)  # as make_flow_kernels decided
         self.cg_batch = cg_batch()
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
-            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, self.cut is not None)
+            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, open_fraction is not None)
         if self.species:
             ox = gas.oxygen
             self._species = make_species_kernel(gg, G, self.flow, gas.density, ox.diffusivity)

@@ -345,3 +345,73 @@ def test_gpu_form_of_the_gas_follows_the_serial_form(solver_for, monkeypatch):
     for name in ("p", "T"):
         a, b = getattr(serial.gas.G, name).to_numpy(), getattr(parallel.gas.G, name).to_numpy()
         assert np.abs(a - b).max() <= 1e-7 * np.abs(a).max(), "gas " + name
+
+
+def tube_in_packed_bed(u=0.3, **gas):
+    """An 8 mm tube at 400 K in a fixed bed of 1 mm grains at 300 K, air at u (4 mm cells)."""
+    return make_scene(
+        domain={"min": [0, 0, 0], "max": [0.024, 0.004, 0.04], "periodic": ["y"], "walls": "auto",
+                "gravity": [0, 0, -9.81]},
+        materials={"sand": SAND},
+        particles=[{"name": "bed", "material": "sand", "diameter": {"value": D}, "fixed": True,
+                    "region": {"min": [0, 0, 0], "max": [0.024, 0.004, 0.03]}, "temperature": 300.0}],
+        tubes=[{"center": [0.012, 0.0, 0.015], "axis": "y", "diameter": 0.008, "temperature": 400.0}],
+        heat={"initial_temperature": 300.0},
+        gas={"cell_size": 0.004, "inlet_velocity": u, "coupling_interval": 1, "initial_temperature": 300.0,
+             **gas},
+        numerics={"dt": 1e-4, "force_dt": True},
+    )
+
+
+@pytest.mark.parametrize("convection, u", [("martin_nilles", 0.3), ("martin_nilles", 1.0),
+                                           ("churchill_bernstein", 0.3)])
+def test_tube_to_gas_convection_in_a_packed_bed_is_the_correlation(solver_for, convection, u):
+    """The heat a tube gives the gas of each cell around it equals the correlation at that cell's
+    voidage and gas velocity: Martin & Nilles' packed-bed wall term in the cell's packed share
+    phi = (1 - eps) / 0.6 (its superficial velocity eps |u| at most Wen-Yu's U_mf) and
+    Churchill-Bernstein in the rest, or Churchill-Bernstein times eps."""
+    from tidem.analytic.fluidized_bed_heat import (cylinder_cross_flow, packed_bed_wall_convection,
+                                                   wen_yu_minimum_fluidization)
+    from tidem.kernels.gas_energy import EPS_PACKED
+
+    s = solver_for(tube_in_packed_bed(u, tube_convection=convection))
+    s.step()
+    G = s.gas
+    cells = G.cell_fields()
+    area, t_wall = G.G.wall_A.to_numpy(), G.G.wall_T.to_numpy()
+    around = (area > 0) & (G.solid == 0)
+    eps, temp = cells["voidage"][around], cells["temperature"][around]
+    speed = np.linalg.norm(cells["velocity"][around], axis=-1)
+    assert eps.max() < 0.7 and speed.min() > 0.1, "the cells around the tube hold grains and flowing gas"
+    h_cb = cylinder_cross_flow(RHO_G * speed * 0.008 / MU, 1005.0 * MU / 0.026) * 0.026 / 0.008
+    if convection == "martin_nilles":
+        phi = np.minimum(1.0, (1.0 - eps) / (1.0 - EPS_PACKED))
+        u_mf = wen_yu_minimum_fluidization(D, 2500.0, RHO_G, MU)
+        assert ((eps * speed).min() < u_mf) and ((eps * speed).max() > u_mf) == (u > u_mf), "the cap acts above U_mf"
+        h_pb = np.array([packed_bed_wall_convection(min(e * v, u_mf), D, RHO_G, MU, 0.026, 1005.0)
+                         for e, v in zip(eps, speed)])
+        h = phi * h_pb + (1.0 - phi) * h_cb
+        assert (h > h_cb * eps).all(), "grains at the wall raise the gas convection"
+    else:
+        h = h_cb * eps
+    expected = float((h * area[around] * (t_wall[around] - temp)).sum())
+    assert float(G.G.wall_rate.to_numpy()[0]) == pytest.approx(expected, rel=1e-9)
+
+
+def test_cells_beside_a_tube_keep_the_share_outside_it():
+    """Open fraction of the fluid cells a tube reaches into (16 x 16 points across its axis): the
+    volume they lose is the tube's cross-section outside its solid cells (a fine raster), x L."""
+    from tidem.gas_geometry import solid_cells, tube_open_fraction
+    from tidem.kernels.gas_grid import GasGrid
+
+    gg = GasGrid(lo=(0.0, 0.0, 0.0), cells=(6, 1, 10), h=(0.004, 0.004, 0.004), periodic=(False, True, False))
+    tube = {"c": [0.012, 0.0, 0.015], "mask": [1.0, 0.0, 1.0], "r": 0.0043, "T": 400.0}
+    solid = solid_cells(gg, [tube])
+    f = tube_open_fraction(gg, [tube], solid)
+    assert (f[solid == 1] == 1.0).all() and f.min() < 0.9
+    lost = float(((1.0 - f) * gg.volume).sum())
+    x, z = np.meshgrid((np.arange(2400) + 0.5) * 1e-5, (np.arange(4000) + 0.5) * 1e-5, indexing="ij")
+    in_tube = (x - 0.012) ** 2 + (z - 0.015) ** 2 < tube["r"] ** 2
+    in_solid = solid[(x / 0.004).astype(int), 0, (z / 0.004).astype(int)] == 1
+    expected = float((in_tube & ~in_solid).sum()) * 1e-10 * 0.004
+    assert lost == pytest.approx(expected, rel=0.03)

@@ -50,7 +50,7 @@ class Gas(Strict):
     initial_temperature: Positive | None = None
     drag: Literal["gidaspow", "di_felice"] = "gidaspow"
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
-    tube_convection: Literal["churchill_bernstein", "none"] = "churchill_bernstein"
+    tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"
     conduction: bool = True
     coupling_interval: int = Field(default=10, ge=1)
     tolerance: Positive = 1e-8
