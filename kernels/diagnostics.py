@@ -59,3 +59,37 @@ def make_health_kernel(S):
                 ti.atomic_min(S.worst_at[1], i)
 
     return health
+
+
+def make_sample_kernel(S, P, z_lo: float, z_bin: float, bins: int, heat: bool):
+    """Return `sample_stats(n)` for a GPU's time series (`tidem.particle_stats`): P.z_hist[b] = the
+    active particles whose centre height z lies in bin b (width z_bin from z_lo; heights beyond
+    count in the end bins), and with `heat` P.T_sum[None] = sum of their temperatures,
+    P.T_top[None] = the largest, P.T_low[None] = minus the smallest (both raised by `raise_max`).
+    Sums and extremes over CHUNK particles in registers, then one atomic each."""
+
+    @ti.kernel
+    def sample_stats(n: ti.i32):
+        for b in P.z_hist:
+            P.z_hist[b] = 0
+        if ti.static(heat):
+            P.T_sum[None] = 0.0
+            P.T_top[None] = -1e300
+            P.T_low[None] = -1e300
+        for c in range((n + CHUNK - 1) // CHUNK):
+            total, top, low = 0.0, -1e300, -1e300
+            for i in range(c * CHUNK, ti.min(n, (c + 1) * CHUNK)):
+                if S.active[i]:
+                    b = ti.cast(ti.floor((S.x[i][2] - z_lo) / z_bin), ti.i32)
+                    ti.atomic_add(P.z_hist[ti.min(ti.max(b, 0), bins - 1)], 1)
+                    if ti.static(heat):
+                        T = S.T[i]
+                        total += T
+                        top = ti.max(top, T)
+                        low = ti.max(low, -T)
+            if ti.static(heat):
+                ti.atomic_add(P.T_sum[None], total)
+                raise_max(P.T_top, top)
+                raise_max(P.T_low, low)
+
+    return sample_stats

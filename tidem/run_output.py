@@ -14,7 +14,6 @@ import numpy as np
 
 from tidem.averaging import AverageRecorder
 from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
-from tidem.hydrodynamics import bed_top
 from tidem.io.mesh_output import MeshOutput
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
@@ -157,11 +156,14 @@ class Output:
         row = {"time_s": solver.t, "step": solver.steps}
         row.update(solver.energies())
         row["max_overlap_ratio"] = solver.health()[2]
+        stats = {}
+        if self.bed_height or self.model.features.heat:
+            stats = solver.particle_stats.sample(solver.n, self.bed_height)
         if self.bed_height:
-            active = solver.state.active.to_numpy().astype(bool)
-            row["bed_height_m"] = bed_top(solver.state.x.to_numpy()[active, 2])
+            row["bed_height_m"] = stats.pop("bed_top")
         row.update(solver.outlet_summary())
         if self.model.features.heat:
+            row.update(stats)
             row.update(solver.heat_summary())
         if solver.gas is not None:
             row.update(solver.gas.summary())

@@ -30,6 +30,7 @@ from tidem.kernels.contact_laws import LINEAR
 from tidem.kernels.reactions import make_reaction_kernel
 from tidem.kernels.contact import make_force_kernel
 from tidem.kernels.diagnostics import make_energy_kernel, make_health_kernel
+from tidem.particle_stats import ParticleStats
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.mesh_contact import make_mesh_mover
 from tidem.kernels.ordered import in_order
@@ -73,6 +74,8 @@ class Solver:
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, self.state)
         self._health = make_health_kernel(self.state)
+        dom = model.scene.domain
+        self.particle_stats = ParticleStats(self.state, (dom.min[2], dom.max[2]), f.heat)
         self._build_sources_and_sinks()
         self._move_meshes = None
         self.mesh_t_build = 0.0  # time of the last neighbour build, as the moving meshes' candidates see it
@@ -346,13 +349,10 @@ class Solver:
                     coordination=contacts / max(active, 1.0), particles=int(active))
 
     def heat_summary(self) -> dict:
-        """Mean/min/max particle temperature [K] and heat flow [W] and heat [J] per heated surface."""
+        """Heat flow [W] and heat [J] per heated surface (the particles' temperatures:
+        `particle_stats`)."""
         S = self.state
-        active = S.active.to_numpy().astype(bool)
-        T = S.T.to_numpy()[active]
         out = {}
-        if len(T):
-            out.update(T_mean_K=float(T.mean()), T_min_K=float(T.min()), T_max_K=float(T.max()))
         rate, energy = S.surf_rate.to_numpy(), S.surf_energy.to_numpy()
         f = self.model.features
         n_planes = len(self.model.planes)
@@ -369,6 +369,7 @@ class Solver:
         return out
 
     def release(self) -> None:
+        self.particle_stats.release()
         if self.gas is not None:
             self.gas.release()
         self.state.release()
