@@ -42,7 +42,8 @@ from tidem.model import Model
 from tidem.phases import PhaseTimer, clock
 from tidem.pour import Pourer
 from tidem.runtime import hot
-from tidem.state import State, allocate, load_bins
+from tidem.state import State, allocate
+from tidem.state_fill import load_bins
 from tidem.storage_order import SCRATCH, SORT_MIN_PARTICLES, sort_storage
 from tidem.surfaces import is_heated
 
