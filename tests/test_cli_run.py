@@ -89,6 +89,31 @@ def test_ctrl_c_keeps_finished_output(tmp_path, monkeypatch):
     assert not list(out.rglob("*.tmp"))
 
 
+def test_output_folder_removed_during_a_run_is_one_line_not_a_crash(tmp_path, monkeypatch):
+    """The output folder deleted while the run goes on, then SIGTERM (the stop flag): the final
+    checkpoint and run.json cannot be written; one line names the folder, exit 74, no crash log."""
+    import shutil
+
+    from tidem.solver import Solver
+
+    real_step = Solver._step
+
+    def step(self, drift_next, diag):
+        if self.steps == 300:
+            while out.exists():  # the snapshot writer thread may rename a file under rmtree's feet
+                shutil.rmtree(out, ignore_errors=True)
+            raise KeyboardInterrupt
+        real_step(self, drift_next, diag)
+
+    monkeypatch.setattr(Solver, "_step", step)
+    monkeypatch.setenv("TIDEM_LOG_DIR", str(tmp_path / "logs"))
+    out = tmp_path / "gone"
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render"])
+    assert result.exit_code == 74, result.output
+    assert "could not write its output" in result.output and str(out) in result.output
+    assert not (tmp_path / "logs").exists()
+
+
 def test_scenes_lists_shipped_with_runtime():
     result = runner.invoke(app, ["scenes"])
     assert result.exit_code == 0

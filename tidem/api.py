@@ -27,10 +27,11 @@ from typing import Any
 
 import numpy as np
 
-from tidem.launch import InputError
+from tidem.launch import InputError, OutputLost
 from tidem.scene.errors import SceneError
 
-__all__ = ["load_scene", "run", "read_run", "RunFolder", "RunFailed", "RunInterrupted", "SceneError", "InputError"]
+__all__ = ["load_scene", "run", "read_run", "RunFolder", "RunFailed", "RunInterrupted", "SceneError", "InputError",
+           "OutputLost"]
 
 
 class RunFailed(RuntimeError):
@@ -76,7 +77,7 @@ def run(scene, out: str | Path | None = None, *, render: bool = False, plots: bo
     checkpoint it continues from); returns the finished run folder. `render` renders frames and
     the movie (a background process), `plots` writes plots/*.png, `progress` shows the progress
     bar and the lines `tidem scene` prints; `t_end`, `smoke` and `arch` are the CLI's --t-end,
-    --smoke and --arch. Raises SceneError, InputError, RunFailed or RunInterrupted (module
+    --smoke and --arch. Raises SceneError, InputError, RunFailed, RunInterrupted or OutputLost (module
     docstring)."""
     from tidem import launch
     from tidem.scene.load import LoadedScene

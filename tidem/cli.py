@@ -61,6 +61,8 @@ def scene(
                                 frame_progress=_report(quiet), say=_say)
     except launch.RenderInterrupted as exc:
         fail(str(exc), 130)
+    except launch.OutputLost as exc:
+        fail(str(exc), 74)
     message = launch.outcome_message(result)
     if message is not None:
         fail(message, 3 if result.status == "failed" else 130)

@@ -13,7 +13,8 @@ from tidem.scene.errors import SceneError
 
 EXIT_CODES = ("Exit codes: 0 done; 2 bad input (the message names the file, the key and the fix); 3 a run stopped "
               "(output so far kept); 70 internal error (a bug: one line names a log file with the traceback, in "
-              "$TIDEM_LOG_DIR or the temporary folder's tidem-logs); 130 interrupted (output and checkpoint kept).")
+              "$TIDEM_LOG_DIR or the temporary folder's tidem-logs); 74 the output folder could not be written any "
+              "more (removed, disk full); 130 interrupted (output and checkpoint kept).")
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help=f"tidem: hot granular flows in Taichi.\n\n{EXIT_CODES}")
 

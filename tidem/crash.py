@@ -4,7 +4,8 @@ the terminal and a log file holding the full traceback for a bug report.
 Exit codes of `tidem` (also in the CLI help and docs/errors.md): 0 done, 2 bad input (scene,
 option or path; one message names the file, the key and the fix), 3 a run stopped (NaN,
 runaway overlap, capacity; the output written so far is kept), 70 an internal error (a bug:
-the log file named on the terminal has the traceback), 130 interrupted (Ctrl-C or SIGTERM;
+the log file named on the terminal has the traceback), 74 the output folder could not be written
+any more (`tidem.launch.OutputLost`), 130 interrupted (Ctrl-C or SIGTERM;
 finished output and a checkpoint are kept).
 """
 

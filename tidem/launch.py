@@ -13,6 +13,7 @@ notes, rendering problems) go to the `say` callback.
 from __future__ import annotations
 
 import contextlib
+import errno
 import shutil
 import sys
 import tempfile
@@ -26,6 +27,11 @@ Say = Callable[[str], None]
 
 class InputError(ValueError):
     """Bad input outside the scene file: an option, the output folder, a checkpoint."""
+
+
+class OutputLost(RuntimeError):
+    """The run could not write into its output folder any more (the folder removed, the disk
+    full or read-only): `tidem scene` exits 74."""
 
 
 class RenderInterrupted(KeyboardInterrupt):
@@ -170,8 +176,16 @@ def execute(prepared: Prepared, progress: bool = True, render: bool = True, plot
 
     out_dir, name = prepared.out_dir, prepared.model.name
     with renderer(out_dir, render, say) as background:
-        result = run(prepared.model, out_dir, progress=progress, on_snapshot=background, view=view,
-                     resume=prepared.checkpoint)
+        try:
+            result = run(prepared.model, out_dir, progress=progress, on_snapshot=background, view=view,
+                         resume=prepared.checkpoint)
+        except OSError as exc:
+            inside = bool(exc.filename) and Path(exc.filename).resolve().is_relative_to(out_dir.resolve())
+            if not out_dir.is_dir() or inside or exc.errno in (errno.ENOSPC, errno.EROFS, errno.EDQUOT):
+                raise OutputLost(f"{out_dir}: the run could not write its output ({exc.strerror or exc}: "
+                                 f"{exc.filename}); was the folder removed, or is the disk full or read-only? What "
+                                 "was written before is kept where the folder still exists") from None
+            raise
         if view is not None:
             view.close()
         s = result.summary
