@@ -113,7 +113,8 @@ def neighbor_bytes(feat, neighbors: int) -> int:
 def gas_cell_bytes(feat) -> int:
     """Bytes of the gas grid's Taichi fields per cell (`tidem.gas`)."""
     fp = feat.float_bytes
-    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + bool(feat.n_meshes)) + 4 * 4
+    open_share = bool(feat.n_meshes or feat.n_tubes)  # the cells cut by meshes or beside tubes
+    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share) + 4 * 4
 
 
 def averaging_cell_bytes(feat) -> int:
