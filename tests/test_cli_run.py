@@ -114,6 +114,28 @@ def test_output_folder_removed_during_a_run_is_one_line_not_a_crash(tmp_path, mo
     assert not (tmp_path / "logs").exists()
 
 
+def test_a_stop_asked_while_the_solver_is_built_ends_the_run_before_its_first_step(tmp_path, monkeypatch):
+    """SIGTERM (the stop flag) during the set-up: no step taken, status interrupted, exit 130, a
+    checkpoint at step 0 (before, the default handler killed the process with nothing said)."""
+    from tidem import run_loop
+
+    real_enter = run_loop.StopRequest.__enter__
+
+    def enter(self):
+        handled = real_enter(self)
+        if self.signal is None:
+            self.signal = "SIGTERM"
+        return handled
+
+    monkeypatch.setattr(run_loop.StopRequest, "__enter__", enter)
+    out = tmp_path / "early"
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render"])
+    assert result.exit_code == 130, result.output
+    run = json.loads((out / "run.json").read_text())
+    assert run["status"] == "interrupted" and run["steps"] == 0
+    assert (out / "checkpoint.npz").is_file()
+
+
 def test_scenes_lists_shipped_with_runtime():
     result = runner.invoke(app, ["scenes"])
     assert result.exit_code == 0

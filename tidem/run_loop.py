@@ -86,10 +86,12 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         out.write_summary(summary(model, None, "starting", 0.0))
     t_setup = time.perf_counter()
     owned = solver is None  # made here: its Taichi fields are freed at the end (a notebook runs many)
+    stop = StopRequest()
     try:
-        solver = solver or Solver(model)
-        if resume is not None:
-            checkpoint.restore(solver, *resume)
+        with stop:  # Ctrl-C or SIGTERM while the solver is built: the run stops before its first step
+            solver = solver or Solver(model)
+            if resume is not None:
+                checkpoint.restore(solver, *resume)
     except (RunError, checkpoint.CheckpointError) as exc:
         out.close()
         data = summary(model, None, "failed", 0.0, str(exc))
@@ -139,7 +141,6 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     bar = RunProgress(enabled=progress, t_end=t_end, particles=int(model.active0.sum()) or model.capacity)
     last_ckpt = time.perf_counter()
     in_step = False
-    stop = StopRequest()
 
     def output_due(t: float) -> bool:
         """Whether the loop writes or shows anything at the end of a step at time t."""
@@ -167,6 +168,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                 lap("output", start)
                 if solver.steps >= total_steps:
                     break
+                if stop.signal is not None:  # asked during the set-up
+                    raise KeyboardInterrupt
                 in_step = True
                 solver.advance(solver.steps_until(output_due, 50, total_steps))
                 in_step = False
