@@ -35,3 +35,21 @@ def test_unknown_runtime_mode_is_a_clear_error(monkeypatch, variable, value, cho
     assert result.exit_code == 2
     assert f"{variable}='{value}': use one of {choices}" in result.output
     assert "Traceback" not in result.output
+
+
+def test_a_stale_kernel_cache_lock_is_removed_and_a_fresh_one_kept(tmp_path, capsys):
+    """Taichi's cache lock left by a killed process (older than STALE_LOCK_S) goes, with one line
+    on stderr; a lock another process may hold now stays; no lock, nothing happens."""
+    import os
+    import time
+
+    from tidem.runtime import STALE_LOCK_S, clear_stale_cache_lock
+
+    lock = tmp_path / "ticache.lock"
+    assert not clear_stale_cache_lock(str(tmp_path))
+    lock.touch()
+    assert not clear_stale_cache_lock(str(tmp_path)) and lock.exists()
+    old = time.time() - 2 * STALE_LOCK_S
+    os.utime(lock, (old, old))
+    assert clear_stale_cache_lock(str(tmp_path)) and not lock.exists()
+    assert "stale Taichi kernel-cache lock" in capsys.readouterr().err

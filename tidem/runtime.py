@@ -111,6 +111,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
             log_level=ti.ERROR,
         )
     started = _started_arch()
+    clear_stale_cache_lock(ti.lang.impl.current_cfg().offline_cache_file_path)
     ti.lang.impl.current_cfg().advanced_optimization = mode == "full"
     if started != arch:
         ti.reset()
@@ -121,6 +122,29 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
     if started == "cpu":
         bound_workers = bind_workers(threads, process_threads() - existing, _busy_loop)
     return started
+
+
+STALE_LOCK_S = 600.0  # a live process holds Taichi's cache lock for a cache read or write (seconds at most)
+
+
+def clear_stale_cache_lock(cache_dir: str, now: float | None = None) -> bool:
+    """Remove Taichi's offline-cache lock `ticache.lock` in `cache_dir` when it is older than
+    STALE_LOCK_S: a process killed while it held the lock leaves it behind, and from then on every
+    process fails to take it ("Lock ... failed") and compiles every kernel anew (17 s instead of
+    about 1 s for the bubbling bed's kernels). Says so on stderr; True if one was removed."""
+    import time
+
+    lock = os.path.join(cache_dir, "ticache.lock")
+    try:
+        age = (time.time() if now is None else now) - os.path.getmtime(lock)
+        if age < STALE_LOCK_S:
+            return False
+        os.remove(lock)
+    except OSError:  # none there, or gone meanwhile, or not ours to remove
+        return False
+    print(f"tidem: removed a stale Taichi kernel-cache lock ({lock}, {age / 3600:.1f} h old, left by a killed "
+          "process); compiled kernels are read from the cache again", file=sys.stderr)
+    return True
 
 
 def _busy_loop() -> None:
