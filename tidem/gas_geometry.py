@@ -56,11 +56,11 @@ def tube_open_fraction(gg: GasGrid, tubes: list[dict], solid: np.ndarray, sub: i
     outside = np.ones(gg.cells)
     idx = np.indices(gg.cells).reshape(3, -1).T
     lo, h = np.asarray(gg.lo), np.asarray(gg.h)
+    centres = lo + (idx + 0.5) * h
     offsets = (np.arange(sub) + 0.5) / sub - 0.5
     for t in tubes:
         mask = np.asarray(t["mask"])
         across = np.flatnonzero(mask > 0)
-        centres = lo + (idx + 0.5) * h
         d = (centres - np.asarray(t["c"])) * mask
         near = np.einsum("ij,ij->i", d, d) < (t["r"] + np.linalg.norm(h[across])) ** 2
         share = np.zeros(near.sum())

@@ -20,6 +20,7 @@ import contextlib
 import io
 import os
 import sys
+import time
 
 import taichi as ti
 
@@ -132,8 +133,6 @@ def clear_stale_cache_lock(cache_dir: str, now: float | None = None) -> bool:
     STALE_LOCK_S: a process killed while it held the lock leaves it behind, and from then on every
     process fails to take it ("Lock ... failed") and compiles every kernel anew (17 s instead of
     about 1 s for the bubbling bed's kernels). Says so on stderr; True if one was removed."""
-    import time
-
     lock = os.path.join(cache_dir, "ticache.lock")
     try:
         age = (time.time() if now is None else now) - os.path.getmtime(lock)
