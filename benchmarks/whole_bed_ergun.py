@@ -4,7 +4,8 @@ bed's own voidage profile (issue 36, part 3).
 
 A periodic column (12 x 12 mm, 50 mm high) of 1 mm grains is filled on a lattice, let fall and
 settle on the distributor (0.25 s, no gas); the settled grains are then fixed and air blows through
-them at U = 0.1 m/s (about u_mf / 5) for 30 gas steps, at each gas cell size given. The reference is
+them at U = 0.1 m/s (about u_mf / 5) for 30 gas steps, at each gas cell size given, with each
+`gas.voidage` ("cell" and "layered"). The reference is
 Ergun's gradient at the voidage of thin horizontal slices of the bed (exact sphere slices, bins of
 d/2 and of d/20), integrated over the height; the simulated drop is the mean inlet pressure less
 the gas column's weight rho_g g H. Per pair of cell centres the script also prints the simulated
@@ -16,13 +17,15 @@ Usage (from the repository root): python benchmarks/whole_bed_ergun.py [cell siz
 
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from tidem.analytic.ergun import ergun_gradient, whole_bed_ergun  # noqa: E402
+from tidem.analytic.ergun import slice_voidage as tidem_slices  # noqa: E402
 
 MU, RHO, D, U = 1.8e-5, 1.2, 0.001, 0.1
 SAND = {"density": 2500.0, "youngs_modulus": 2e6, "poisson_ratio": 0.3, "restitution": 0.3, "friction": 0.3}
@@ -52,36 +55,26 @@ def settle() -> np.ndarray:
     return x
 
 
-def ergun(eps, u=U, d=D):
-    """Ergun (1952) pressure gradient [Pa/m] at superficial velocity u."""
-    return 150 * (1 - eps) ** 2 * MU * u / (eps**3 * d * d) + 1.75 * (1 - eps) * RHO * u * u / (eps**3 * d)
+def ergun(eps):
+    return ergun_gradient(eps, U, D, MU, RHO)
 
 
-def slice_voidage(x: np.ndarray, dz: float, sub: int = 50) -> np.ndarray:
-    """Voidage of horizontal bins of height dz over the column (sphere slices integrated exactly enough:
-    `sub` points a bin)."""
-    nb = int(round(L[2] / dz))
-    z = (np.arange(nb * sub) + 0.5) * dz / sub
-    solid = np.zeros_like(z)
-    for zi in x[:, 2]:
-        solid += math.pi * np.clip((D / 2) ** 2 - (z - zi) ** 2, 0.0, None)
-    return (1.0 - solid / (L[0] * L[1])).reshape(nb, sub).mean(axis=1)
+def slice_voidage(x: np.ndarray, dz: float) -> np.ndarray:
+    return tidem_slices(x[:, 2], D, L[0] * L[1], L[2], dz)
 
 
 def reference(x: np.ndarray, dz: float) -> float:
-    eps = slice_voidage(x, dz)
-    bed = eps < 0.999
-    return float(ergun(eps[bed]).sum() * dz)
+    return whole_bed_ergun(x[:, 2], D, L[0] * L[1], L[2], U, MU, RHO, dz)
 
 
-def blow(x: np.ndarray, cell: float):
+def blow(x: np.ndarray, cell: float, voidage: str = "layered"):
     from tidem.model import build_model
     from tidem.scene.load import validate
     from tidem.solver import Solver
 
     raw = column(particles=[{"name": "bed", "material": "sand", "diameter": {"value": D}, "fixed": True,
                              "positions": x.tolist()}],
-                 gas={"cell_size": cell, "inlet_velocity": U, "coupling_interval": 1},
+                 gas={"cell_size": cell, "inlet_velocity": U, "coupling_interval": 1, "voidage": voidage},
                  numerics={"dt": 1e-4, "force_dt": True})
     s = Solver(build_model(validate(raw)))
     for _ in range(30):
@@ -101,19 +94,20 @@ def main(cells: list[float]) -> None:
     half, fine = reference(x, D / 2), reference(x, D / 20)
     print(f"{len(x)} grains settled, top centre at {x[:, 2].max() * 1e3:.2f} mm; Ergun over the slice voidage: "
           f"{half:.2f} Pa (bins of d/2), {fine:.2f} Pa (d/20)")
-    print("| gas cell | simulated drop [Pa] | / Ergun (d/2 bins) | / Ergun (d/20 bins) |")
-    print("|---|---|---|---|")
+    print("| gas cell | gas.voidage | simulated drop [Pa] | / Ergun (d/2 bins) | / Ergun (d/20 bins) |")
+    print("|---|---|---|---|---|")
     profiles = {}
     for cell in cells:
-        dp, p, eps = blow(x, cell)
-        profiles[cell] = (p, eps)
-        print(f"| {cell * 1e3:g} mm ({cell / D:g} d) | {dp:.2f} | {dp / half:.3f} | {dp / fine:.3f} |")
+        for voidage in ("cell", "layered"):
+            dp, p, eps = blow(x, cell, voidage)
+            profiles[cell, voidage] = (p, eps)
+            print(f"| {cell * 1e3:g} mm ({cell / D:g} d) | {voidage} | {dp:.2f} | {dp / half:.3f} | {dp / fine:.3f} |")
     cell = max(cells)
-    p, eps = profiles[cell]
+    p, eps = profiles[cell, "layered"]
     h = L[2] / len(p)
     z_fine = (np.arange(int(round(L[2] / (D / 20)))) + 0.5) * D / 20
     eps_fine = slice_voidage(x, D / 20)
-    print(f"\nper pair of cell centres, {cell * 1e3:g} mm cells (cell voidage in brackets):")
+    print(f"\nper pair of cell centres, {cell * 1e3:g} mm cells, layered (cell voidage in brackets):")
     for k in range(len(p) - 1):
         if eps[k] > 0.99:
             break

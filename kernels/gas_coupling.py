@@ -3,7 +3,9 @@
 At each gas step (every `coupling_interval` DEM steps):
   deposit_volume: eps_c = 1 - sum_p w_pc V_p / (f_c V_cell) (cloud-in-cell, `gas_grid.make_cic`;
                   f_c the open fraction of a cell a mesh cuts, `tidem.gas_mesh`, else 1),
-                  clipped below at `min_voidage`.
+                  clipped below at `min_voidage`. With `layers` = m > 1 the solid volume is also
+                  deposited on layers m times thinner than a cell (about one grain high;
+                  same cells across), for the voidage a grain sees (below).
   couple:         per particle, eps_p and u_p interpolated with the same weights; the drag
                   coefficient K_p (`drag.make_drag`) and heat conductance H_p = h_p pi d^2
                   (`drag.make_nusselt`) are frozen until the next gas step (the largest
@@ -11,7 +13,16 @@ At each gas step (every `coupling_interval` DEM steps):
                   step limit); K_p w_pf is added
                   to face f's implicit drag coefficient B_f and K_p w_pf v_p to Bv_f, and with
                   heat H_p w_pc to the cell's H_c and H_p w_pc T_p to HT_c.
-  sample:         after the gas step, u_p, grad p_p and T_g,p (and Y_O2,p) at each particle.
+                  Layered (m > 1, `gas.voidage = "layered"`): eps_p from the layers
+                  (`layered_voidage`), u_p = sum_f w_pf eps_f u_f / eps_p (the superficial velocity
+                  over the grain's own voidage) and K_p = K(eps_p) s_p, s_p = min(eps_c,p / eps_p, 2)
+                  with eps_c,p the cells' voidage at the grain: the gas carries -eps_c grad p, so a
+                  grain's whole fluid force is about its drag / eps_c, and s_p makes that its own
+                  voidage's, K(eps_p) (u_p - v_p) / eps_p (a settled bed then carries Ergun over its
+                  own voidage profile, surface layer included); the face gets K_p w_pf eps_f / eps_p
+                  in B_f (and K_p w_pf v_p in Bv_f), which keeps the exchange exactly opposite.
+  sample:         after the gas step, u_p (layered: from the superficial velocity over the frozen
+                  eps_p), grad p_p and T_g,p (and Y_O2,p) at each particle.
 Every DEM step (`add_gas_forces`): f_p += K_p (u_p - v_p) - V_p grad p_p (source 1, Tsuji
 form, the gas carrying -eps grad p), and q_p += H_p (T_g,p - T_p).
 Below the first cell centre, where gas enters through the distributor, the gas temperature
@@ -29,14 +40,35 @@ import math
 import taichi as ti
 
 from .drag import make_drag, make_nusselt
-from .gas_grid import make_cic
+from .gas_grid import layer_grid, make_cic
 from .ordered import in_order
+
+MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas_limits`)
+
+
+def make_self_share(corner):
+    """Return self_share(base, frac): the sum over lattice points J of (the CIC weight a particle puts on J)^2,
+    what its own volume adds (per unit of volume / cell volume) to the voidage it reads back with the same
+    weights; two corners folded onto one point at a wall, or wrapped onto one on a one-cell periodic axis, count
+    as one point."""
+
+    @ti.func
+    def self_share(base, frac):
+        s = 1.0
+        for a in ti.static(range(3)):
+            o1 = ti.Vector([0, 0, 0])
+            o1[a] = 1
+            if corner(base, ti.Vector([0, 0, 0]), -1)[a] != corner(base, o1, -1)[a]:
+                s *= (1.0 - frac[a]) ** 2 + frac[a] ** 2
+        return s
+
+    return self_share
 
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
                           species: bool = False, tracer_dt: float = 0.0, t_in: float = 0.0,
-                          coarse_grain: bool = False, cut_cells: bool = False):
+                          coarse_grain: bool = False, cut_cells: bool = False, layers: int = 1):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
     particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
@@ -49,8 +81,17 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     closures of MFiX's CGDEM and CFDEM's coarse-grained models), which keeps the grains'
     terminal velocity, drag relaxation time and lumped heating time; the pressure-gradient
     force and the voidage take the parcel's volume, k^3 grains' volume. With `cut_cells` (meshes or
-    tubes in the gas) the voidage is taken over each cell's open volume G.open."""
+    tubes in the gas) the voidage is taken over each cell's open volume G.open. With `layers` > 1
+    (G.solid_layer allocated) a grain's voidage comes from horizontal layers `layers` times thinner
+    than a gas cell (`layered_voidage`)."""
     cic, corner, weight = make_cic(gg)
+    layered = layers > 1
+    lcic = lcorner = lself = cself = inv_lvol = None  # used only when layered
+    if layered:
+        lg = layer_grid(gg, layers)
+        lcic, lcorner, _ = make_cic(lg)
+        inv_lvol = 1.0 / lg.volume
+        lself, cself = make_self_share(lcorner), make_self_share(corner)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
     inv_vol = 1.0 / gg.volume
@@ -67,6 +108,25 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             base, frac = cic(x, c)
             for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
                 out[c] += weight(frac, o) * F[c][corner(base, o, c)]
+        return out
+
+    @ti.func
+    def face_voidage(J, c: ti.template()):
+        """eps_f of face J normal to axis c: the mean of its two cells (as `gas_flow`)."""
+        below = J
+        below[c] -= 1
+        zero = ti.Vector([0, 0, 0])
+        return 0.5 * (G.eps[corner(below, zero, -1)] + G.eps[corner(J, zero, -1)])
+
+    @ti.func
+    def sample_superficial(x):
+        """eps_f u_f interpolated to x, per component (the superficial velocity)."""
+        out = ti.Vector([0.0, 0.0, 0.0])
+        for c in ti.static(range(3)):
+            base, frac = cic(x, c)
+            for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                J = corner(base, o, c)
+                out[c] += weight(frac, o) * face_voidage(J, c) * U[c][J]
         return out
 
     @ti.func
@@ -100,10 +160,38 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         r = S.radius[i]
         return 4.0 / 3.0 * math.pi * r * r * r
 
+    @ti.func
+    def layered_voidage(x, vp):
+        """The voidage a grain of volume vp at x sees, from the layers (docs/scenes.md, `gas.voidage`): eps_l,
+        the layers' voidage interpolated to x, with the grain's own share moved from the layer
+        scale to the cell scale in proportion to S0(phi) = (1 - phi)^4 / (1 + 2 phi)^2, the Percus-Yevick
+        structure factor at zero wave number of its neighbours' solid fraction phi (a loose suspension, S0 -> 1:
+        a lone grain sees the cell voidage; a packed bed, S0 -> 0: the layer voidage as it is)."""
+        base, frac = lcic(x, -1)
+        eps_l = 0.0
+        open_l = 0.0
+        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+            J = lcorner(base, o, -1)
+            open_vol = 1.0
+            if ti.static(cut_cells):
+                open_vol = G.open[J[0], J[1], J[2] // layers]
+            w = weight(frac, o)
+            eps_l += w * (1.0 - G.solid_layer[J] * inv_lvol / open_vol)
+            open_l += w * open_vol
+        own_l = vp * inv_lvol / open_l * lself(base, frac)
+        cbase, cfrac = cic(x, -1)
+        own_c = vp * inv_vol / open_l * cself(cbase, cfrac)
+        phi = ti.min(ti.max(1.0 - eps_l - own_l, 0.0), 1.0)
+        s0 = (1.0 - phi) ** 4 / (1.0 + 2.0 * phi) ** 2
+        return ti.min(ti.max(eps_l + s0 * (own_l - own_c), min_voidage), 1.0)
+
     @ti.kernel
     def deposit_volume(n: ti.i32):
         for I in ti.grouped(G.solid_vol):
             G.solid_vol[I] = 0.0
+        if ti.static(layered):
+            for I in ti.grouped(G.solid_layer):
+                G.solid_layer[I] = 0.0
         if ti.static(ordered):
             ti.loop_config(serialize=True)  # sums in particle order: bit-identical runs on any thread count
         for i in range(n):
@@ -112,6 +200,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 vp = volume(i)
                 for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
                     G.solid_vol[corner(base, o, -1)] += weight(frac, o) * vp
+                if ti.static(layered):
+                    base, frac = lcic(S.x[i], -1)
+                    for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                        G.solid_layer[lcorner(base, o, -1)] += weight(frac, o) * vp
         for I in ti.grouped(G.eps):
             G.eps_old[I] = G.eps[I]
             open_vol = 1.0
@@ -137,15 +229,23 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         for i in range(n):
             if S.active[i]:
                 x = S.x[i]
-                eps = sample_cells(G.eps, x)
-                u = sample_faces(U, x)
+                eps = 0.0
+                u = ti.Vector([0.0, 0.0, 0.0])
+                scale = 1.0  # layered: eps_c / eps_p (the grain's whole fluid force at its own voidage)
+                if ti.static(layered):
+                    eps = layered_voidage(x, volume(i))
+                    u = sample_superficial(x) / eps
+                    scale = ti.min(sample_cells(G.eps, x) / eps, MAX_SCALE)
+                else:
+                    eps = sample_cells(G.eps, x)
+                    u = sample_faces(U, x)
                 d = 2.0 * S.radius[i]
                 grains = 1.0  # grains per parcel
                 if ti.static(coarse_grain):
                     d /= S.cg[i]
                     grains = S.cg[i] ** 3
                 w = (u - S.v[i]).norm()
-                k = grains * drag_coefficient(eps, d, w)
+                k = grains * drag_coefficient(eps, d, w) * scale
                 if ti.static(tracer_dt > 0.0):
                     if S.rx[i] >= 0:
                         k = ti.min(k, 0.5 * S.mass[i] / tracer_dt)
@@ -157,7 +257,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                     for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
                         wk = weight(frac, o) * k
                         J = corner(base, o, c)
-                        B[c][J] += wk
+                        if ti.static(layered):
+                            B[c][J] += wk * face_voidage(J, c) / eps
+                        else:
+                            B[c][J] += wk
                         BV[c][J] += wk * S.v[i][c]
                 if ti.static(heat):
                     h = nusselt(eps, d, w) * k_gas / d
@@ -185,7 +288,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         for i in range(n):
             if S.active[i]:
                 x = S.x[i]
-                S.gu[i] = sample_faces(U, x)
+                if ti.static(layered):
+                    S.gu[i] = sample_superficial(x) / S.geps[i]
+                else:
+                    S.gu[i] = sample_faces(U, x)
                 S.ggp[i] = sample_faces(GP, x)
                 if ti.static(heat):
                     S.gT[i] = sample_temperature(x)

@@ -44,6 +44,12 @@ class GasGrid:
         return tuple(self.lo[a] + (idx[a] + 0.5) * self.h[a] for a in range(3))
 
 
+def layer_grid(gg: GasGrid, layers: int) -> GasGrid:
+    """The grid of horizontal layers: the cells of gg across, each cut into `layers` along z."""
+    nx, ny, nz = gg.cells
+    return GasGrid(gg.lo, (nx, ny, nz * layers), (gg.h[0], gg.h[1], gg.h[2] / layers), gg.periodic)
+
+
 def make_cic(gg: GasGrid):
     """Return cic(x, stagger) -> (base index vector, fraction vector) and corner(base, o, shape).
 

@@ -200,6 +200,7 @@ def check(
         *([f"conduction: every {loaded.scene.heat.conduction_interval} step(s); explicit limit {model.thermal_limit:.4g} s "
            f"(heat.conduction_interval up to {min(int(model.thermal_limit / model.dt), MAX_CONDUCTION_INTERVAL)})"] if model.thermal_limit else []),
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
+        *([gas_line(model)] if f.gas else []),
         *report_lines(model.meshes, model.mesh_table, 2 * float(model.radius.min())),
         *(model.gas_cut.report_lines() if model.gas_cut is not None else []),
         f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
@@ -213,6 +214,16 @@ def check(
     from tidem.launch import passage_notes
 
     passage_notes(loaded.scene, "note: ", typer.echo)
+
+
+def gas_line(model) -> str:
+    """`tidem check`'s line on the gas grid and the voidage its grains see."""
+    from tidem.gas_geometry import gas_grid, voidage_layers
+
+    gg = gas_grid(model.scene)
+    layers = voidage_layers(model)
+    return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
+            f"sees: {model.scene.gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else ""))
 
 
 @app.command()

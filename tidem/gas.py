@@ -26,7 +26,7 @@ from tidem.kernels.species import make_species_kernel
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas_fields import allocate_gas_fields
 from tidem.gas_mesh import MIN_OPEN
-from tidem.gas_geometry import gas_grid, gas_walls, inlet_map, tube_open_fraction, tube_walls
+from tidem.gas_geometry import gas_grid, gas_walls, inlet_map, tube_open_fraction, tube_walls, voidage_layers
 from tidem.gas_limits import MAX_COURANT
 from tidem.phases import PhaseTimer, clock
 from tidem.species import M_O2, o2_mass_fraction
@@ -75,8 +75,9 @@ class GasPhase:
         if self.cut is not None:
             open_fraction = np.clip(self.cut.open_fraction * (1.0 if open_fraction is None else open_fraction),
                                     MIN_OPEN, 1.0)
+        self.layers = voidage_layers(model)
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes), self.heat,
-                                                 self.sources, self.species, open_fraction)
+                                                 self.sources, self.species, open_fraction, self.layers)
         G = self.G
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
@@ -95,7 +96,8 @@ class GasPhase:
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
-            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, open_fraction is not None)
+            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, open_fraction is not None,
+            self.layers)
         if self.species:
             ox = gas.oxygen
             self._species = make_species_kernel(gg, G, self.flow, gas.density, ox.diffusivity)

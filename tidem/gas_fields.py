@@ -29,9 +29,11 @@ from tidem.kernels.gas_grid import GasGrid
 
 
 def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarray], walls: dict | None,
-                        n_tubes: int, heat: bool, sources: bool, species: bool, open_fraction: np.ndarray | None = None):
+                        n_tubes: int, heat: bool, sources: bool, species: bool, open_fraction: np.ndarray | None = None,
+                        layers: int = 1):
     """Place the fields a scene's gas needs and fill the fixed ones (solid cells, face kinds,
-    tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree)."""
+    tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree). With `layers` > 1,
+    solid_layer: the solid volume on cells cut into that many horizontal layers (`kernels/gas_coupling.py`)."""
     G = SimpleNamespace()
     fb = ti.FieldsBuilder()
     cell_names = ["eps", "eps_old", "solid_vol", "p", "rhs", "diag", "cg_r", "cg_d", "cg_q"]
@@ -46,6 +48,9 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
     for name in cell_names:
         setattr(G, name, ti.field(fp))
         fb.dense(ti.ijk, gg.cells).place(getattr(G, name))
+    if layers > 1:
+        G.solid_layer = ti.field(fp)
+        fb.dense(ti.ijk, (gg.cells[0], gg.cells[1], gg.cells[2] * layers)).place(G.solid_layer)
     G.solid = ti.field(ti.i32)
     fb.dense(ti.ijk, gg.cells).place(G.solid)
     for name, dtype in (("u", fp), ("us", fp), ("A", fp), ("C", fp), ("gp", fp), ("B", fp), ("Bv", fp),

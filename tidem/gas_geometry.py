@@ -193,3 +193,22 @@ def inlet_map(gg: GasGrid, gas) -> np.ndarray:
             inside &= (Y >= nz.y[0]) & (Y <= nz.y[1])
         u[inside] = nz.velocity
     return u
+
+
+def voidage_layers(model) -> int:
+    """Horizontal layers per gas cell for the voidage a grain sees (`kernels/gas_coupling.py`): about one
+    particle (parcel) diameter high, the Sauter mean of the scene's particles, at least 1; 1 with
+    `gas.voidage = "cell"`."""
+    return layers_for(model.scene, float(sauter_diameter(2.0 * model.radius)))
+
+
+def sauter_diameter(d: np.ndarray) -> float:
+    """sum d^3 / sum d^2 [m]."""
+    return float((d**3).sum() / (d**2).sum())
+
+
+def layers_for(scene, d: float) -> int:
+    """`voidage_layers` for particles of diameter d [m]."""
+    if scene.gas.voidage == "cell":
+        return 1
+    return max(1, round(gas_grid(scene).h[2] / d))

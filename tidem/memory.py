@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tidem.features import scene_features
-from tidem.gas_geometry import gas_grid
+from tidem.gas_geometry import gas_grid, layers_for, voidage_layers
 from tidem.mesh_bins import mesh_field_bytes
 from tidem.scene.averaging_layout import cell_grid
 from tidem.scene.sizes import largest_parcel, max_diameter, parcel_count
@@ -110,11 +110,12 @@ def neighbor_bytes(feat, neighbors: int) -> int:
     return per
 
 
-def gas_cell_bytes(feat) -> int:
-    """Bytes of the gas grid's Taichi fields per cell (`tidem.gas`)."""
+def gas_cell_bytes(feat, layers: int = 1) -> int:
+    """Bytes of the gas grid's Taichi fields per cell (`tidem.gas`), with `layers` voidage layers a cell."""
     fp = feat.float_bytes
     open_share = bool(feat.n_meshes or feat.n_tubes)  # the cells cut by meshes or beside tubes
-    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share) + 4 * 4
+    layered = layers if layers > 1 else 0
+    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share + layered) + 4 * 4
 
 
 def averaging_cell_bytes(feat) -> int:
@@ -200,7 +201,8 @@ def scene_items(scene) -> list[Item]:
                       "use a smaller domain"))
     if scene.gas is not None:
         cells = math.prod(max(1, round(n / scene.gas.cell_size)) for n in lengths)
-        items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * (gas_cell_bytes(feat)
+        layers = layers_for(scene, dmin)
+        items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * (gas_cell_bytes(feat, layers)
                           + GAS_HOST_BYTES_PER_CELL), "gas.cell_size", "use larger gas cells or a smaller domain"))
     if scene.averaging is not None:
         cells = math.prod(cell_grid(scene)[0])
@@ -250,7 +252,7 @@ def field_bytes(model) -> int:
     per = particle_field_bytes(f, model.max_neighbors, model.wall_slots) + neighbor_bytes(f, model.max_neighbors)
     cells = model.grid.n_cells * CELL_BYTES
     if f.gas:
-        cells += math.prod(gas_grid(model.scene).cells) * gas_cell_bytes(f)
+        cells += math.prod(gas_grid(model.scene).cells) * gas_cell_bytes(f, voidage_layers(model))
     return per * model.capacity + cells + mesh_field_bytes(model)
 
 

@@ -74,7 +74,7 @@ def test_pressure_probes_read_the_layer_means_and_the_ergun_gradient(solver_for)
         solver_for(packed_column(u, pressure_probes=[0.01, 0.05]))
 
 
-def fluid_bed(inlet, t_ramp=0.0):
+def fluid_bed(inlet, t_ramp=0.0, voidage="layered"):
     """About 900 particles in a periodic slab; soft (2 MPa, overlaps up to 10 % allowed while
     the starting lattice collapses) and frictionless, so that the bed settles to a random
     packing near Wen-Yu's eps_mf and the test runs in seconds."""
@@ -84,7 +84,8 @@ def fluid_bed(inlet, t_ramp=0.0):
         materials={"sand": {**SAND, "youngs_modulus": 2e6, "friction": 0.0}},
         particles=[{"name": "bed", "material": "sand", "diameter": {"value": D},
                     "region": {"min": [0, 0, 0], "max": [0.016, 0.004, 0.02]}}],
-        gas={"cell_size": 0.004, "inlet_velocity": inlet, "inlet_ramp": t_ramp, "coupling_interval": 10},
+        gas={"cell_size": 0.004, "inlet_velocity": inlet, "inlet_ramp": t_ramp, "coupling_interval": 10,
+             "voidage": voidage},
         numerics={"max_overlap": 0.1},
     )
 
@@ -92,29 +93,6 @@ def fluid_bed(inlet, t_ramp=0.0):
 def wen_yu_umf(rho_p=2500.0, d=D):
     ar = d**3 * RHO_G * (rho_p - RHO_G) * 9.81 / MU**2
     return (math.sqrt(33.7**2 + 0.0408 * ar) - 33.7) * MU / (RHO_G * d)
-
-
-def test_velocity_ramp_finds_wen_yu_minimum_fluidization_and_bed_weight(solver_for):
-    """Ramp the inlet from 0 to 1.25 u_mf (Wen-Yu 0.54 m/s): the pressure drop climbs along
-    Ergun until it carries the bed (that velocity is u_mf), then stays at the bed weight per
-    area (averaged over 0.26 s of gentle oscillation). At 1.5 u_mf this shallow bed slugs
-    and rests on the distributor part of the time, so the mean falls about 10 % short."""
-    umf = wen_yu_umf()
-    t_ramp, t_hold = 0.2, 0.26
-    s = solver_for(fluid_bed(1.25 * umf, t_ramp))
-    weight = float(s.model.mass.sum()) * 9.81 / (0.016 * 0.004)
-    u_seen, dp_seen = [], []
-    while s.t < t_ramp + t_hold:
-        for _ in range(50):
-            s.step()
-        u_seen.append(1.25 * umf * min(s.t / t_ramp, 1.0))
-        dp_seen.append(s.gas.pressure_drop() - RHO_G * 9.81 * 0.06)  # less the gas column
-    u_seen, dp_seen = np.array(u_seen), np.array(dp_seen)
-    held = dp_seen[u_seen >= 1.25 * umf * 0.999]
-    u_found = u_seen[np.argmax(dp_seen >= weight)]
-    print(f"u_mf found {u_found:.3f} m/s, Wen-Yu {umf:.3f} m/s; fluidized dp {held.mean():.1f} Pa, weight {weight:.1f} Pa")
-    assert held.mean() == pytest.approx(weight, rel=0.05)
-    assert u_found == pytest.approx(umf, rel=0.2)
 
 
 def cd_di_felice(re):

@@ -49,6 +49,7 @@ class Gas(Strict):
     inlet_temperature: Positive | None = None
     initial_temperature: Positive | None = None
     drag: Literal["gidaspow", "di_felice"] = "gidaspow"
+    voidage: Literal["layered", "cell"] = "layered"
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"
     conduction: bool = True
