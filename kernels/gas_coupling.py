@@ -43,6 +43,7 @@ from .drag import make_drag, make_nusselt
 from .gas_grid import layer_grid, make_cic
 from .ordered import in_order
 
+CORNERS = [(q // 4, q // 2 % 2, q % 2) for q in range(8)]  # a CIC cube's corners, in ti.ndrange(2, 2, 2) order
 MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas_limits`)
 
 
@@ -95,6 +96,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
     inv_vol = 1.0 / gg.volume
+    fp = G.eps.dtype  # the gas fields' float type
     ordered = in_order()
     U = G.u
     B = G.B
@@ -120,14 +122,18 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
 
     @ti.func
     def sample_superficial(x):
-        """eps_f u_f interpolated to x, per component (the superficial velocity)."""
+        """eps_f u_f interpolated to x, per component (the superficial velocity), and the eps_f of the 8 faces of
+        each component's CIC cube (row c, column CORNERS index), for the deposit in `couple`."""
         out = ti.Vector([0.0, 0.0, 0.0])
+        eps_f = ti.Matrix.zero(fp, 3, 8)
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
-            for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+            for q in ti.static(range(8)):
+                o = ti.Vector(CORNERS[q])
                 J = corner(base, o, c)
-                out[c] += weight(frac, o) * face_voidage(J, c) * U[c][J]
-        return out
+                eps_f[c, q] = face_voidage(J, c)
+                out[c] += weight(frac, o) * eps_f[c, q] * U[c][J]
+        return out, eps_f
 
     @ti.func
     def sample_cells(F: ti.template(), x):
@@ -231,10 +237,12 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 x = S.x[i]
                 eps = 0.0
                 u = ti.Vector([0.0, 0.0, 0.0])
+                eps_f = ti.Matrix.zero(fp, 3, 8)  # layered: the faces' eps_f (`sample_superficial`)
                 scale = 1.0  # layered: eps_c / eps_p (the grain's whole fluid force at its own voidage)
                 if ti.static(layered):
                     eps = layered_voidage(x, volume(i))
-                    u = sample_superficial(x) / eps
+                    u, eps_f = sample_superficial(x)
+                    u /= eps
                     scale = ti.min(sample_cells(G.eps, x) / eps, MAX_SCALE)
                 else:
                     eps = sample_cells(G.eps, x)
@@ -254,11 +262,12 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 ti.atomic_max(rate, k * S.inv_mass[i])
                 for c in ti.static(range(3)):
                     base, frac = cic(x, c)
-                    for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                    for q in ti.static(range(8)):
+                        o = ti.Vector(CORNERS[q])
                         wk = weight(frac, o) * k
                         J = corner(base, o, c)
                         if ti.static(layered):
-                            B[c][J] += wk * face_voidage(J, c) / eps
+                            B[c][J] += wk * eps_f[c, q] / eps
                         else:
                             B[c][J] += wk
                         BV[c][J] += wk * S.v[i][c]
@@ -289,7 +298,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             if S.active[i]:
                 x = S.x[i]
                 if ti.static(layered):
-                    S.gu[i] = sample_superficial(x) / S.geps[i]
+                    superficial, _eps_f = sample_superficial(x)
+                    S.gu[i] = superficial / S.geps[i]
                 else:
                     S.gu[i] = sample_faces(U, x)
                 S.ggp[i] = sample_faces(GP, x)

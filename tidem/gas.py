@@ -26,7 +26,8 @@ from tidem.kernels.species import make_species_kernel
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas_fields import allocate_gas_fields
 from tidem.gas_mesh import MIN_OPEN
-from tidem.gas_geometry import gas_grid, gas_walls, inlet_map, tube_open_fraction, tube_walls, voidage_layers
+from tidem.gas_geometry import (gas_grid, gas_walls, inlet_map, sauter_diameter, tube_open_fraction, tube_walls,
+                                 voidage_layers)
 from tidem.gas_limits import MAX_COURANT
 from tidem.phases import PhaseTimer, clock
 from tidem.species import M_O2, o2_mass_fraction
@@ -46,9 +47,7 @@ def grain_sauter_diameter(model) -> float:
     of coarse-graining factor k holds k^3 grains of its diameter / k): the length of the packed-bed
     tube convection."""
     k = np.ones_like(model.radius) if model.coarse_grain is None else model.coarse_grain
-    d = 2.0 * model.radius / k
-    n = k**3
-    return float((n * d**3).sum() / (n * d**2).sum())
+    return sauter_diameter(2.0 * model.radius / k, k**3)
 
 
 class GasPhase:

@@ -199,12 +199,12 @@ def voidage_layers(model) -> int:
     """Horizontal layers per gas cell for the voidage a grain sees (`kernels/gas_coupling.py`): about one
     particle (parcel) diameter high, the Sauter mean of the scene's particles, at least 1; 1 with
     `gas.voidage = "cell"`."""
-    return layers_for(model.scene, float(sauter_diameter(2.0 * model.radius)))
+    return layers_for(model.scene, sauter_diameter(2.0 * model.radius))
 
 
-def sauter_diameter(d: np.ndarray) -> float:
-    """sum d^3 / sum d^2 [m]."""
-    return float((d**3).sum() / (d**2).sum())
+def sauter_diameter(d: np.ndarray, count: np.ndarray | float = 1.0) -> float:
+    """Sauter mean diameter [m] of `count` spheres of each diameter d: sum n d^3 / sum n d^2."""
+    return float((count * d**3).sum() / (count * d**2).sum())
 
 
 def layers_for(scene, d: float) -> int:
