@@ -8,7 +8,7 @@ pair's partner lies in the owner's slab or in the next one. The slabs are groupe
 (`block_count`: an even number of blocks, at most 16, each of two slabs or more; one block below
 four slabs), so (`passes`)
 1. pass 1: each block, one thread per block, sweeps its slabs but the last in order, each in index
-   order (its pairs, walls, tubes and meshes), adding to the sums of that slab and the next, which the last
+   order (its pairs, walls and tubes), adding to the sums of that slab and the next, which the last
    kick-drift zeroed (`kernels/integrate.py`; and the contact counts, where the host reads them,
    here); when the step goes on, it integrates (`then`) each slab after the block's first as soon as
    it is swept: its sums are complete (each slab receives only from itself and the one before), and
@@ -26,6 +26,12 @@ about once per step, which is what the large beds, whose fields do not fit in ca
 of its own and the sums are atomic: the same forces, summed in an order that varies from run to run.
 With heat the same evaluation adds the conduction (contact spot and gas lens) to the particles'
 heat flows and to the heated surfaces' (`surf_rate`, atomic: a few sums all threads share).
+
+Mesh walls (`mesh_pass`): before the passes, a parallel loop of its own adds the mesh contacts of the
+particles that list a triangle (a few: those at the apparatus' walls) to their sums, and clears the
+contact counts (`diag`) that pass 1 would clear: the sweep that every particle goes through carries no
+mesh code (on the CPU the same speed within this machine's noise, `benchmarks/README.md`; on a GPU the
+few threads with triangles no longer hold up the warps of the others).
 
 Quiet partners (`kernels/pair_contact.py`): while no pair listed apart at the last build can have
 closed, the pass evaluates only the partners that touched then; this changes no bit.
@@ -174,9 +180,6 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                                                                  force, torque, heat_in, worst, touching)
         force, torque, heat_in, worst, touching = surf.visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag,
                                                              force, torque, heat_in, worst, touching)
-        if ti.static(n_meshes):
-            force, torque, heat_in, worst, touching = mesh.visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag,
-                                                                 force, torque, heat_in, worst, touching)
         add(S.f, i, force)
         add(S.tq, i, torque)
         if ti.static(heat):
@@ -184,6 +187,27 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         if diag:
             raise_to(S.ovl, i, worst)
             add(S.ncontact, i, touching)
+
+    @ti.func
+    def mesh_pass(n, t, dt, conduct, diag):
+        """Before the pair passes, a loop of its own: each particle's diagnostics cleared (`diag`) and the mesh
+        contacts of those that list a triangle added to its sums (plain stores: one thread per particle). Kept
+        out of the pair sweep, the mesh code costs the particles that list no triangle nothing (module docstring)."""
+        for i in range(n):
+            if S.active[i]:
+                if diag:
+                    clear(i)
+                if S.mc_n[i] > 0:
+                    ri = radius_of(i)
+                    force, torque, heat_in, worst, touching = mesh.visit(
+                        i, S.x[i], S.v[i], S.w[i], ri, mass_of(i), S.mat[i], t, dt, conduct, diag, zero3, zero3, 0.0, 0.0, 0)
+                    S.f[i] = S.f[i] + force
+                    S.tq[i] = S.tq[i] + torque
+                    if ti.static(heat):
+                        S.q[i] = S.q[i] + conduct * heat_in
+                    if diag:
+                        S.ovl[i] = worst
+                        S.ncontact[i] = touching
 
     @ti.func
     def quiet_reach():
@@ -251,11 +275,14 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             if ti.static(kicks):
                 S.max_disp[None] = 0.0  # the kick-drifts' displacements follow
             start_pass(conduct)
+            if ti.static(n_meshes):
+                mesh_pass(n, t, dt, conduct, diag)
             if ti.static(flat):
-                if diag:
-                    for i in range(n):
-                        if S.active[i]:
-                            clear(i)
+                if ti.static(not n_meshes):  # (else the mesh pass has cleared them)
+                    if diag:
+                        for i in range(n):
+                            if S.active[i]:
+                                clear(i)
                 for i in range(n):
                     if S.active[i]:
                         visit(i, t, dt, conduct, diag, reach)
@@ -274,9 +301,10 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                             if b >= n_blocks:
                                 break
                             lo, hi = block_start(b), block_start(b + 1)
-                            if diag:
-                                for s in range(lo, hi):
-                                    clear_slab(s)
+                            if ti.static(not n_meshes):  # (else the mesh pass has cleared them)
+                                if diag:
+                                    for s in range(lo, hi):
+                                        clear_slab(s)
                             for s in range(lo, hi - 1):
                                 sweep_slab(s, t, dt, conduct, diag, reach)
                                 if ti.static(kicks):

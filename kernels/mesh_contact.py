@@ -23,7 +23,12 @@ and nothing changes where it crosses an edge or passes a vertex (the edge and ve
 the triangles around lie on a nearer one); at a concave edge each face's closest point lies on
 its own face only, so both act. A face contact's normal is the face normal (exact for a plane
 made of triangles: the same bits as the analytic plane), an edge or vertex contact's the line
-from x to p.
+from x to p. Flat patches: where every triangle a particle lists lies in one plane patch (joined
+by flat shared edges, `tidem.mesh_geometry.flat_patches`) and x lies over the face of one of them,
+that face is the nearest point of the patch and every other listed triangle's contact would be
+suppressed, so the particle touches that face alone without testing the others; it tries first
+the triangle whose face it was over last (a floor of fine triangles costs about one nearest-point
+test a step, `benchmarks/README.md`).
 
 History. Each particle has `WM` slots (mh_id: mesh index or -1, mh_n: the contact normal,
 mh_ft / mh_mr / mh_dmax: tangential spring, rolling spring, largest overlap). A contact takes the
@@ -178,8 +183,78 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
         return best
 
     @ti.func
+    def touch(i, k, p, feature, d2, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, used, force, torque, heat_in, worst,
+              touching):
+        """Contact of particle i with listed triangle k (closest point p, `feature`, squared distance d2 within
+        reach): the contact law and its history slot if it touches, else the gas lens' conduction; added to
+        the sums, `used` (bit q: slot q holds a contact of this step) updated."""
+        m = S.tri_mesh[k]
+        nrm = zero3
+        dist = 0.0
+        if feature == FACE:
+            a, b, c = triangle(k)
+            face = (b - a).cross(c - a).normalized()
+            side = (xi - a).dot(face)
+            dist = ti.abs(side)
+            nrm = -face
+            if side < 0.0:
+                nrm = face
+        else:
+            dist = ti.sqrt(d2)
+            nrm = (p - xi) / dist
+        delta = ri - dist
+        s = n_surf + m
+        params = S.ps[mat_i, s]
+        if delta > 0.0:
+            slot = slot_for(i, m, nrm, used)
+            if slot < 0:
+                ti.atomic_add(S.overflow[1], 1)
+            else:
+                used |= 1 << slot
+                S.mh_n[i, slot] = nrm
+                u = wall_velocity(m, xi + dist * nrm, nrm, t)
+                v_rel = vi - u + (ri * wi).cross(nrm)
+                dmax = 0.0
+                if ti.static(hysteretic):
+                    dmax = S.mh_dmax[i, slot]
+                mr = zero3
+                if ti.static(rolling):
+                    mr = S.mh_mr[i, slot]
+                f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+                    nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri, params,
+                    S.mh_ft[i, slot], mr, dmax, dt)
+                force += f
+                torque += (ri * nrm).cross(f_t) + m_roll
+                S.mh_ft[i, slot] = xi_new
+                if ti.static(rolling):
+                    S.mh_mr[i, slot] = mr_new
+                if ti.static(hysteretic):
+                    S.mh_dmax[i, slot] = dmax_new
+                if ti.static(heat):
+                    if conduct and S.surf_T[s] > 0.0:
+                        flow = wall_conductance(params, ri, delta, cg) * (S.surf_T[s] - S.T[i])
+                        if ti.static(radiation):
+                            flow += wall_radiation(params, ri, S.surf_T[s], S.T[i])
+                        heat_in += flow
+                        ti.atomic_add(S.surf_rate[s], flow)
+                if diag:
+                    worst = ti.max(worst, delta / ri)
+                    touching += 1
+        else:
+            if ti.static(pfp):
+                if conduct and S.surf_T[s] > 0.0:
+                    flow = cg * pfp_conductance(params, ri, -delta / cg, fluid_layer * ri / cg) * (
+                        S.surf_T[s] - S.T[i])
+                    heat_in += flow
+                    ti.atomic_add(S.surf_rate[s], flow)
+        return used, force, torque, heat_in, worst, touching
+
+    @ti.func
     def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching):
-        """Particle i's mesh contacts (and gas-lens conduction to heated meshes), added to the sums."""
+        """Particle i's mesh contacts (and gas-lens conduction to heated meshes), added to the sums. A particle
+        whose listed triangles all lie in one flat patch (S.mc_flat[i] >= 0, `list_candidates`) and whose
+        centre lies over the face of one of them touches that face only (module docstring: the others'
+        contacts would all be suppressed); it tries first the triangle S.mc_flat[i] it was over last."""
         used = 0  # bit q: slot q holds a contact of this step
         cnt = S.mc_n[i]
         if cnt > 0:  # (a particle with no triangle in reach holds no slot: `list_candidates`)
@@ -187,104 +262,71 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
             if ti.static(pfp):
                 near = ri * (1.0 + fluid_layer)
             near2 = near * near
-            d2s = ti.Vector([0.0] * M)  # each listed triangle's squared distance and feature, for `suppressed`
-            features = ti.Vector([0] * M)
-            hits = 0
-            for q in range(cnt):
-                _p, f_q, d2_q = nearest(xi, S.mc_tri[i, q])
-                features[q] = f_q
-                d2s[q] = d2_q
-                if d2_q < near2:
-                    hits += 1
-            for q in range(cnt):
-                k = S.mc_tri[i, q]
-                feature, d2 = features[q], d2s[q]
-                if d2 < near2:
-                    p, _f, _d2 = nearest(xi, k)
-                    if hits == 1 or not suppressed(i, q, p, feature, d2, cnt, ri, d2s, features):
-                        m = S.tri_mesh[k]
-                        nrm = zero3
-                        dist = 0.0
-                        if feature == FACE:
-                            a, b, c = triangle(k)
-                            face = (b - a).cross(c - a).normalized()
-                            side = (xi - a).dot(face)
-                            dist = ti.abs(side)
-                            nrm = -face
-                            if side < 0.0:
-                                nrm = face
-                        else:
-                            dist = ti.sqrt(d2)
-                            nrm = (p - xi) / dist
-                        delta = ri - dist
-                        s = n_surf + m
-                        params = S.ps[mat_i, s]
-                        if delta > 0.0:
-                            slot = slot_for(i, m, nrm, used)
-                            if slot < 0:
-                                ti.atomic_add(S.overflow[1], 1)
-                            else:
-                                used |= 1 << slot
-                                S.mh_n[i, slot] = nrm
-                                u = wall_velocity(m, xi + dist * nrm, nrm, t)
-                                v_rel = vi - u + (ri * wi).cross(nrm)
-                                dmax = 0.0
-                                if ti.static(hysteretic):
-                                    dmax = S.mh_dmax[i, slot]
-                                mr = zero3
-                                if ti.static(rolling):
-                                    mr = S.mh_mr[i, slot]
-                                f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                                    nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri, params,
-                                    S.mh_ft[i, slot], mr, dmax, dt)
-                                force += f
-                                torque += (ri * nrm).cross(f_t) + m_roll
-                                S.mh_ft[i, slot] = xi_new
-                                if ti.static(rolling):
-                                    S.mh_mr[i, slot] = mr_new
-                                if ti.static(hysteretic):
-                                    S.mh_dmax[i, slot] = dmax_new
-                                if ti.static(heat):
-                                    if conduct and S.surf_T[s] > 0.0:
-                                        flow = wall_conductance(params, ri, delta, cg) * (S.surf_T[s] - S.T[i])
-                                        if ti.static(radiation):
-                                            flow += wall_radiation(params, ri, S.surf_T[s], S.T[i])
-                                        heat_in += flow
-                                        ti.atomic_add(S.surf_rate[s], flow)
-                                if diag:
-                                    worst = ti.max(worst, delta / ri)
-                                    touching += 1
-                        else:
-                            if ti.static(pfp):
-                                if conduct and S.surf_T[s] > 0.0:
-                                    flow = cg * pfp_conductance(params, ri, -delta / cg, fluid_layer * ri / cg) * (
-                                        S.surf_T[s] - S.T[i])
-                                    heat_in += flow
-                                    ti.atomic_add(S.surf_rate[s], flow)
-            for q in range(WM):
-                if not (used >> q) & 1:
-                    S.mh_id[i, q] = -1
+            found = False
+            k = S.mc_flat[i]
+            if k >= 0:
+                for q in range(-1, cnt):  # the triangle of the last step first, then the listed ones
+                    if q >= 0:
+                        k = S.mc_tri[i, q]
+                    p, feature, d2 = nearest(xi, k)
+                    if feature == FACE:
+                        found = True
+                        S.mc_flat[i] = k
+                        if d2 < near2:
+                            used, force, torque, heat_in, worst, touching = touch(
+                                i, k, p, feature, d2, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, used, force,
+                                torque, heat_in, worst, touching)
+                        break
+            if not found:
+                d2s = ti.Vector([0.0] * M)  # each listed triangle's squared distance and feature, for `suppressed`
+                features = ti.Vector([0] * M)
+                hits = 0
+                for o in range(cnt):
+                    _p, f_o, d2_o = nearest(xi, S.mc_tri[i, o])
+                    features[o] = f_o
+                    d2s[o] = d2_o
+                    if d2_o < near2:
+                        hits += 1
+                for o in range(cnt):
+                    if d2s[o] < near2:
+                        k = S.mc_tri[i, o]
+                        p, feature, d2 = nearest(xi, k)
+                        if hits == 1 or not suppressed(i, o, p, feature, d2, cnt, ri, d2s, features):
+                            used, force, torque, heat_in, worst, touching = touch(
+                                i, k, p, feature, d2, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, used, force,
+                                torque, heat_in, worst, touching)
+            for slot in range(WM):
+                if not (used >> slot) & 1:
+                    S.mh_id[i, slot] = -1
         return force, torque, heat_in, worst, touching
 
     @ti.func
     def list_candidates(n):
-        """mc_tri / mc_n: the triangles within r_i + reach of each active particle (the broad phase)."""
+        """mc_tri / mc_n: the triangles within r_i + reach of each active particle (the broad phase);
+        mc_flat: the first of them where they all lie in one flat patch (tri_patch), else -1."""
         for i in range(n):
             if S.active[i]:
                 x = S.x[i]
                 r = radius_of(i) + reach
                 c = cell_id(cell_coord(x))
                 cnt = 0
+                patch = -1
+                flat = -1  # a listed triangle where all lie in one flat patch (the first one's), else -1
                 for e in range(S.mbin_start[c], S.mbin_start[c + 1]):
                     k = S.mbin_tri[e]
                     _p, _f, d2 = nearest(x, k)
                     if d2 < r * r:
                         if cnt < M:
                             S.mc_tri[i, cnt] = k
+                        if cnt == 0:
+                            patch, flat = S.tri_patch[k], k
+                        if S.tri_patch[k] != patch or patch < 0:
+                            patch = -2
                         cnt += 1
                 if cnt > M:
                     ti.atomic_max(S.overflow[3], cnt)
                 S.mc_n[i] = ti.min(cnt, M)
+                S.mc_flat[i] = ti.select(patch >= 0, flat, -1)
                 if cnt == 0:  # out of every mesh's reach until the next build: no contact holds a slot
                     for q in range(WM):
                         S.mh_id[i, q] = -1

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tidem.mesh_geometry import flat_patches
+
 MIN_CANDIDATES, MAX_CANDIDATES = 16, 128  # triangles listed per particle at a neighbour build (`candidate_slots`)
 MESH_SLOTS = 4  # mesh contacts a particle can hold at once, each with its history
 
@@ -26,6 +28,7 @@ class MeshTable:
     rest: np.ndarray  # [T, 3, 3] vertices at t = 0, before the image shift [m]
     shift: np.ndarray  # [T, 3] periodic image offset [m]
     mesh_id: np.ndarray  # [T] int32
+    patch: np.ndarray  # [T] int32, flat patch of each triangle (`mesh_geometry.flat_patches`); -1: a periodic image
     start: np.ndarray  # [cells + 1] int32, CSR starts of the bins
     tri: np.ndarray  # [entries] int32, triangle ids by cell
     inflate: float  # how far from a cell its triangles are listed [m], the moving meshes' `margin` included
@@ -55,10 +58,10 @@ def mesh_table(meshes, grid, radius: float, skin: float, lens: float, margin: fl
     margin = margin if moving else 0.0
     list_reach = (skin if moving else 0.5 * skin) + lens
     reach = radius + list_reach
-    rest, shift, mesh_id = triangle_table(meshes, grid, reach + margin)
+    rest, shift, mesh_id, patch = triangle_table(meshes, grid, reach + margin)
     start, tri = bin_triangles(rest + shift[:, None, :], grid, reach + margin)
     capacity = max(2 * len(tri), len(tri) + 4096) if moving else max(len(tri), 1)
-    return MeshTable(rest, shift, mesh_id, start, tri, reach + margin, margin, capacity, candidate_slots(rest, reach),
+    return MeshTable(rest, shift, mesh_id, patch, start, tri, reach + margin, margin, capacity, candidate_slots(rest, reach),
                      list_reach)
 
 
@@ -74,15 +77,19 @@ def candidate_slots(tri: np.ndarray, reach: float) -> int:
     return int(min(max(np.ceil(need), MIN_CANDIDATES), MAX_CANDIDATES))
 
 
-def triangle_table(meshes, grid, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(rest vertices [T, 3, 3] at t = 0 without the image shift, image shift [T, 3], mesh index [T])
-    of every mesh's triangles, periodic images included (module docstring). A mesh that spans a whole
-    period (a drum's slice drawn from one end of the period to the other) needs none along that axis:
-    the particles' centres lie within the period, so their nearest points do too."""
+def triangle_table(meshes, grid, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(rest vertices [T, 3, 3] at t = 0 without the image shift, image shift [T, 3], mesh index [T],
+    flat patch [T]) of every mesh's triangles, periodic images included (module docstring; an image
+    is a patch of none, -1). A mesh that spans a whole period (a drum's slice drawn from one end of
+    the period to the other) needs none along that axis: the particles' centres lie within the
+    period, so their nearest points do too."""
     rest = [m.vertices[m.triangles] for m in meshes]
     ids = [np.full(len(m.triangles), k, np.int32) for k, m in enumerate(meshes)]
+    first = np.cumsum([0] + [len(m.triangles) for m in meshes])
+    patches = [first[k] + flat_patches(m.vertices, m.triangles) for k, m in enumerate(meshes)]
     verts = np.concatenate(rest) if rest else np.zeros((0, 3, 3))
     mesh_id = np.concatenate(ids) if ids else np.zeros(0, np.int32)
+    originals = len(verts)
     shift = np.zeros((len(verts), 3))
     for a in range(3):
         if not grid.periodic[a]:
@@ -102,7 +109,9 @@ def triangle_table(meshes, grid, reach: float) -> tuple[np.ndarray, np.ndarray, 
         verts = np.concatenate([p[0] for p in parts])
         shift = np.concatenate([p[1] for p in parts])
         mesh_id = np.concatenate([p[2] for p in parts])
-    return verts, shift, mesh_id.astype(np.int32)
+    patch = np.full(len(verts), -1, np.int32)
+    patch[:originals] = np.concatenate(patches) if patches else []
+    return verts, shift, mesh_id.astype(np.int32), patch
 
 
 def bin_triangles(tri: np.ndarray, grid, inflate: float) -> tuple[np.ndarray, np.ndarray]:
@@ -145,7 +154,7 @@ def mesh_field_bytes(model) -> int:
         return 0
     fb = f.float_bytes
     slot = 4 + 6 * fb + (3 * fb if f.rolling else 0) + (fb if f.hysteretic else 0)
-    per_particle = 4 + 4 * tab.candidates + MESH_SLOTS * slot
-    tri = len(tab.mesh_id) * (9 * fb + 4 + (12 * fb if f.moving_meshes else 0))
+    per_particle = 8 + 4 * tab.candidates + MESH_SLOTS * slot
+    tri = len(tab.mesh_id) * (9 * fb + 8 + (12 * fb if f.moving_meshes else 0))
     bins = 4 * (model.grid.n_cells + 1) + 4 * tab.bin_capacity
     return per_particle * model.capacity + tri + bins + 12 * fb * len(model.meshes)

@@ -1,5 +1,5 @@
 """Geometry of triangle meshes in plain numpy: welding coincident vertices, triangle areas, the
-facet sag, the exact point-to-mesh distance and inside tests (ray parity).
+facet sag, flat patches, the exact point-to-mesh distance and inside tests (ray parity).
 
 Used when a scene's `[[meshes]]` are read (`tidem.mesh_load`) and when particles are placed
 (`tidem.placement`: lattice and pour sites that overlap a mesh are skipped). Every function
@@ -16,6 +16,7 @@ import numpy as np
 
 PAIRS = 1 << 18  # points x triangles evaluated at once (a few MB per temporary array)
 FEATURE_ANGLE = 45.0  # deg: edges that turn more are corners of the part, not facets of a curve
+FLAT_TURN, FLAT_SPREAD = 1e-4, 1e-3  # rad: how flat an edge and a patch must be to count as one plane (`flat_patches`)
 
 
 def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
@@ -66,6 +67,32 @@ def _row_groups(keys: np.ndarray) -> np.ndarray:
     return out
 
 
+def _shared_edges(t: np.ndarray):
+    """The edges shared by exactly two triangles of `t` [T, 3]: (f1, f2) the two triangles, (e1, e2) their
+    rows among the directed edges (tail -> head: (t0 t1), (t1 t2), (t2 t0) of each triangle), and the
+    directed edges' `tail`, `head` and `face` arrays."""
+    tail = t.ravel()
+    head = t[:, [1, 2, 0]].ravel()
+    face = np.repeat(np.arange(len(t)), 3)
+    key = np.minimum(tail, head).astype(np.int64) * (int(t.max()) + 1) + np.maximum(tail, head)
+    order = np.argsort(key, kind="stable")
+    key = key[order]
+    first = np.r_[True, key[1:] != key[:-1]]
+    starts = np.flatnonzero(first)
+    counts = np.diff(np.r_[starts, len(key)])
+    pairs = starts[counts == 2]
+    e1, e2 = order[pairs], order[pairs + 1]
+    return face[e1], face[e2], e1, e2, tail, head, face
+
+
+def _unit_normals(vertices: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals [T, 3] (right-hand rule over t0 t1 t2; zero for a zero-area triangle) and twice the areas."""
+    a, b, c = (vertices[t[:, k]] for k in range(3))
+    n = np.cross(b - a, c - a)
+    twice_area = np.linalg.norm(n, axis=1)
+    return n / np.where(twice_area > 0, twice_area, 1.0)[:, None], twice_area
+
+
 def facet_sag(vertices: np.ndarray, triangles: np.ndarray, feature_angle: float = FEATURE_ANGLE) -> float:
     """The largest facet sag [m]: how far the flat facets may lie from the curved surface they
     approximate, estimated at every edge shared by exactly two triangles.
@@ -82,26 +109,12 @@ def facet_sag(vertices: np.ndarray, triangles: np.ndarray, feature_angle: float 
     t = np.asarray(triangles)
     if len(t) < 2:
         return 0.0
-    a, b, c = (vertices[t[:, k]] for k in range(3))
-    n = np.cross(b - a, c - a)
-    twice_area = np.linalg.norm(n, axis=1)
-    n = n / np.where(twice_area > 0, twice_area, 1.0)[:, None]
-    tail = t.ravel()  # directed edges (t0 t1), (t1 t2), (t2 t0) of each triangle
-    head = t[:, [1, 2, 0]].ravel()
-    face = np.repeat(np.arange(len(t)), 3)
+    n, twice_area = _unit_normals(vertices, t)
+    f1, f2, e1, e2, tail, head, face = _shared_edges(t)
+    if not len(f1):
+        return 0.0
     length = np.linalg.norm(vertices[head] - vertices[tail], axis=1)
     width = twice_area[face] / np.where(length > 0, length, np.inf)
-    key = np.minimum(tail, head).astype(np.int64) * (int(t.max()) + 1) + np.maximum(tail, head)
-    order = np.argsort(key, kind="stable")
-    key = key[order]
-    first = np.r_[True, key[1:] != key[:-1]]
-    starts = np.flatnonzero(first)
-    counts = np.diff(np.r_[starts, len(key)])
-    pairs = starts[counts == 2]
-    if not len(pairs):
-        return 0.0
-    e1, e2 = order[pairs], order[pairs + 1]
-    f1, f2 = face[e1], face[e2]
     same_way = tail[e1] == tail[e2]  # consistent winding runs a shared edge in opposite directions
     cos = np.einsum("ij,ij->i", n[f1], n[f2]) * np.where(same_way, -1.0, 1.0)
     theta = np.arccos(np.clip(cos, -1.0, 1.0))
@@ -110,6 +123,40 @@ def facet_sag(vertices: np.ndarray, triangles: np.ndarray, feature_angle: float 
         return 0.0
     sag = 0.5 * np.minimum(width[e1], width[e2]) * np.tan(0.25 * theta)
     return float(sag[ok].max())
+
+
+def flat_patches(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Patch number [T] of each triangle: the smallest index among the triangles joined to it through
+    shared edges across which the surface stays flat (the normals turn by less than FLAT_TURN rad and
+    the far vertex of the second triangle lies within FLAT_TURN of its distance from the first's plane;
+    a float32 STL rounds a plane's triangles to about 1e-5 rad). A patch whose normals spread by more
+    than FLAT_SPREAD rad from its first triangle's (a surface curving very gently over many facets) is
+    split back into single triangles. A floor or a box face drawn as many triangles is one patch, a
+    faceted cylinder a patch per facet (`kernels/mesh_contact.py` treats a particle whose listed
+    triangles all lie in one patch as touching a plane)."""
+    t = np.asarray(triangles)
+    labels = np.arange(len(t))
+    if len(t) < 2:
+        return labels
+    n, _ = _unit_normals(vertices, t)
+    f1, f2, e1, _e2, tail, head, _face = _shared_edges(t)
+    far = vertices[t[f2].sum(axis=1) - tail[e1] - head[e1]] - vertices[tail[e1]]  # f2's vertex off the edge
+    flat = (np.abs(np.einsum("ij,ij->i", n[f1], n[f2])) >= np.cos(FLAT_TURN)) & (
+        np.abs(np.einsum("ij,ij->i", far, n[f1])) <= FLAT_TURN * np.linalg.norm(far, axis=1))
+    f1, f2 = f1[flat], f2[flat]
+    while True:  # spread the smallest label over each join, then let labels point to their labels' labels
+        low = np.minimum(labels[f1], labels[f2])
+        new = labels.copy()
+        np.minimum.at(new, f1, low)
+        np.minimum.at(new, f2, low)
+        new = new[new]
+        if np.array_equal(new, labels):
+            break
+        labels = new
+    bent = np.abs(np.einsum("ij,ij->i", n, n[labels])) < np.cos(FLAT_SPREAD)
+    split = np.isin(labels, labels[bent])
+    labels[split] = np.flatnonzero(split)
+    return labels
 
 
 def _chunks(n_points: int, n_triangles: int):

@@ -113,7 +113,7 @@ def pass_through_errors(meshes: list[MeshWall], dt: float, speed: float, r_min: 
 def report_lines(meshes: list[MeshWall], table, d_min: float) -> list[str]:
     """What `tidem check` says of each mesh: triangles, vertices welded, area, the largest facet sag
     against the smallest particle diameter (a coarse cylinder is a polygon), its motion; and the
-    triangles the kernels hold (periodic copies included) with their cell lists."""
+    triangles the kernels hold (periodic copies included) with their cell lists and flat patches."""
     out = []
     for m in meshes:
         st = m.stats
@@ -124,6 +124,7 @@ def report_lines(meshes: list[MeshWall], table, d_min: float) -> list[str]:
                    f"({st.get('welded', 0)} welded), area {st.get('area', float('nan')):.4g} m^2, largest facet sag "
                    f"{sag:.3g} m = {100 * sag / d_min:.2g} % of the smallest particle diameter{heated}{motion}")
     if table is not None:
+        flat = len(np.unique(table.patch[table.patch >= 0]))
         out.append(f"mesh triangles in the kernels: {len(table.mesh_id)} (periodic copies included), "
-                   f"{len(table.tri)} cell entries")
+                   f"{len(table.tri)} cell entries; {flat} flat patches (a particle over one touches its face alone)")
     return out

@@ -194,6 +194,7 @@ def _place_mesh_fields(p: _Placer, model: Model) -> None:
     T = len(tab.mesh_id)
     p.place((T, 3), "tri_v", n=3)
     p.place((T,), "tri_mesh", ti.i32)
+    p.place((T,), "tri_patch", ti.i32)
     if model.features.moving_meshes:
         p.place((T, 3), "tri_rest", n=3)
         p.place((T,), "tri_shift", n=3)
@@ -201,6 +202,7 @@ def _place_mesh_fields(p: _Placer, model: Model) -> None:
     p.place((tab.bin_capacity,), "mbin_tri", ti.i32)
     p.place((len(model.meshes), 4), "mesh_motion", n=3)
     p.per_particle((N,), "mc_n", ti.i32)
+    p.per_particle((N,), "mc_flat", ti.i32)
     p.per_particle((N, tab.candidates), "mc_tri", ti.i32)
     p.per_particle((N, MESH_SLOTS), "mh_id", ti.i32)
     for name in ("mh_n", "mh_ft"):

@@ -100,6 +100,7 @@ def _fill_meshes(S: SimpleNamespace, model: Model) -> None:
     tab = model.mesh_table
     S.tri_v.from_numpy(tab.rest + tab.shift[:, None, :])
     S.tri_mesh.from_numpy(tab.mesh_id)
+    S.tri_patch.from_numpy(tab.patch)
     if model.features.moving_meshes:
         S.tri_rest.from_numpy(tab.rest)
         S.tri_shift.from_numpy(tab.shift)

@@ -1,5 +1,6 @@
 """Mesh walls against analytic surfaces and laws (`kernels/mesh_contact.py`): a plane made of
-irregular triangles against the analytic plane wall (float64, 1e-9), edge and vertex strikes
+irregular triangles against the analytic plane wall (float64, 1e-9; as one flat patch and as a
+patch per triangle), edge and vertex strikes
 (force along the line to the nearest point, energy kept with e = 1), a concave corner (both faces
 felt), a ball rolling on a turntable (circles at 2 Omega / 7), a heated mesh plate against the
 heated plane wall (1e-9)."""
@@ -51,13 +52,18 @@ def bouncing_sphere(mesh_file=None, precision="float64"):
     return raw
 
 
-def test_plane_of_irregular_triangles_follows_the_analytic_plane(solver_for, tmp_path):
+@pytest.mark.parametrize("patches", ["one flat patch", "a patch per triangle"])
+def test_plane_of_irregular_triangles_follows_the_analytic_plane(solver_for, tmp_path, monkeypatch, patches):
+    """Both narrow phases: the flat patch's (the face under the centre alone) and, with every triangle a
+    patch of its own, the general one (nearest points of all listed triangles, duplicates suppressed)."""
+    if patches != "one flat patch":
+        monkeypatch.setattr("tidem.mesh_bins.flat_patches", lambda v, t: np.arange(len(t)))
     path, n_tri = irregular_square(tmp_path / "plane.stl", 0.1)
     assert n_tri >= 200
     wall = solver_for(bouncing_sphere())
     mesh = solver_for(bouncing_sphere(path))
     assert mesh.dt == wall.dt
-    touched = 0
+    touched = several = 0
     for _ in range(50):
         wall.advance(100)
         mesh.advance(100)
@@ -67,6 +73,10 @@ def test_plane_of_irregular_triangles_follows_the_analytic_plane(solver_for, tmp
             u, v = u.to_numpy(), v.to_numpy()
             assert np.abs(u - v).max() <= 1e-9 * max(np.abs(u).max(), 1e-3), (u, v)
         touched += mesh.state.ovl[0] > 0
+        if mesh.state.mc_n[0] > 1:  # the path taken where it lists several triangles
+            several += 1
+            assert (mesh.state.mc_flat[0] >= 0) == (patches == "one flat patch")
+    assert several > 5
     x = mesh.state.x[0].to_numpy()
     assert touched > 20 and x[0] > 0.05  # rolled on the mesh across many triangles (about 10 along its path)
     assert abs(mesh.state.w[0].to_numpy()).max() > 1.0

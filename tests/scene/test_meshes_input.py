@@ -7,7 +7,7 @@ import pytest
 import pyvista as pv
 
 import tidem.mesh_geometry as geometry
-from tidem.mesh_geometry import facet_sag, inside_closed_mesh, inside_periodic_mesh, point_mesh_distance, weld
+from tidem.mesh_geometry import facet_sag, flat_patches, inside_closed_mesh, inside_periodic_mesh, point_mesh_distance, weld
 from tidem.mesh_load import load_mesh_walls, rotation_matrix, tube_mesh_overlaps
 from tidem.placement import clear_of_obstacles, place_groups
 from tidem.scene.errors import SceneError
@@ -376,3 +376,25 @@ def test_inside_mesh_needs_a_mesh_with_an_inside(tmp_path):
     assert placed is None and len(errors) == 1 and errors[0].startswith("particles[0].inside_mesh: meshes[0] has no inside")
     with pytest.raises(SceneError, match=r"particles\[0\].inside_mesh: there is no meshes\[1\]"):
         validate(raw_scene(particles=[{**group, "inside_mesh": 1}], meshes=[{"file": "plate.stl"}]))
+
+
+def test_flat_patches_join_a_plane_and_keep_the_facets_of_a_curve():
+    """A plane of many triangles is one patch; a box has one patch a face; a 24-facet cylinder's mantle
+    keeps its facets apart (they turn by 15 degrees), each facet's two triangles joined; a gently
+    curved sheet (0.05 mrad a column of triangles, 2 mrad over the sheet) whose patch would spread past FLAT_SPREAD is left in single triangles."""
+    plane = pv.Plane(i_resolution=30, j_resolution=30).triangulate()
+    assert set(flat_patches(np.asarray(plane.points, float), plane.regular_faces)) == {0}
+    box = pv.Box().triangulate()
+    assert len(set(flat_patches(np.asarray(box.points, float), box.regular_faces))) == 6
+    n = 24
+    ang = np.arange(n) * 2 * np.pi / n
+    ring = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    v = np.vstack([np.c_[ring, np.zeros(n)], np.c_[ring, np.ones(n)]])
+    t = np.array([(i, (i + 1) % n, n + i) for i in range(n)] + [((i + 1) % n, n + (i + 1) % n, n + i) for i in range(n)])
+    patch = flat_patches(v, t)
+    assert len(set(patch)) == n and all(patch[i] == patch[n + i] for i in range(n))
+    x = np.linspace(0.0, 1.0, 41)
+    xx, yy = np.meshgrid(x, x)
+    bent = np.c_[xx.ravel(), yy.ravel(), 1e-3 * xx.ravel() ** 2]  # slope turning 0.05 mrad a column
+    sheet = pv.PolyData(bent).delaunay_2d()
+    assert len(set(flat_patches(bent, sheet.regular_faces))) == sheet.n_cells
