@@ -30,8 +30,8 @@ heat flows and to the heated surfaces' (`surf_rate`, atomic: a few sums all thre
 Mesh walls (`mesh_pass`): before the passes, a parallel loop of its own adds the mesh contacts of the
 particles that list a triangle (a few: those at the apparatus' walls) to their sums, and clears the
 contact counts (`diag`) that pass 1 would clear: the sweep that every particle goes through carries no
-mesh code (on the CPU the same speed within this machine's noise, `benchmarks/README.md`; on a GPU the
-few threads with triangles no longer hold up the warps of the others).
+mesh code (on the CPU the same speed within this machine's noise, `benchmarks/README.md`; meant to keep
+the few GPU threads with triangles from holding up the others' warps, not yet measured on a GPU).
 
 Quiet partners (`kernels/pair_contact.py`): while no pair listed apart at the last build can have
 closed, the pass evaluates only the partners that touched then; this changes no bit.
@@ -192,7 +192,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     def mesh_pass(n, t, dt, conduct, diag):
         """Before the pair passes, a loop of its own: each particle's diagnostics cleared (`diag`) and the mesh
         contacts of those that list a triangle added to its sums (plain stores: one thread per particle). Kept
-        out of the pair sweep, the mesh code costs the particles that list no triangle nothing (module docstring)."""
+        out of the pair sweep, the mesh code costs a particle that lists no triangle two loads (module docstring)."""
         for i in range(n):
             if S.active[i]:
                 if diag:
