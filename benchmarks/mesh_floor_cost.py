@@ -10,7 +10,6 @@ Usage (from the repository root): python benchmarks/mesh_floor_cost.py [N=100000
 """
 import os, sys, json, time, tempfile
 from pathlib import Path
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import numpy as np
 os.environ.setdefault("TI_CPU_MAX_NUM_THREADS", "2")
 from tidem.runtime import ensure_taichi

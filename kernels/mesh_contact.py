@@ -318,9 +318,10 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
                     if d2 < r * r:
                         if cnt < M:
                             S.mc_tri[i, cnt] = k
+                        own = S.tri_patch[k]
                         if cnt == 0:
-                            patch, flat = S.tri_patch[k], k
-                        if S.tri_patch[k] != patch or patch < 0:
+                            patch, flat = own, k
+                        if own != patch or own < 0:
                             patch = -2
                         cnt += 1
                 if cnt > M:
