@@ -40,10 +40,9 @@ import math
 import taichi as ti
 
 from .drag import make_drag, make_nusselt
-from .gas_grid import layer_grid, make_cic
+from .gas_grid import CORNERS, layer_grid, make_cic, serial_loops
 from .ordered import in_order
 
-CORNERS = [(q // 4, q // 2 % 2, q % 2) for q in range(8)]  # a CIC cube's corners, in ti.ndrange(2, 2, 2) order
 MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas_limits`)
 
 
@@ -96,8 +95,11 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
     inv_vol = 1.0 / gg.volume
-    fp = G.eps.dtype  # the gas fields' float type
     ordered = in_order()
+    serial = serial_loops(gg)  # the grid's own loops in one thread (small grids on the CPU)
+    cells = tuple(gg.cells)
+    faces = [gg.face_shape(c) for c in range(3)]
+    layer_cells = (cells[0], cells[1], cells[2] * layers)
     U = G.u
     B = G.B
     BV = G.Bv
@@ -108,7 +110,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         out = ti.Vector([0.0, 0.0, 0.0])
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
-            for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+            for q in ti.static(range(8)):
+                o = ti.Vector(CORNERS[q])
                 out[c] += weight(frac, o) * F[c][corner(base, o, c)]
         return out
 
@@ -122,24 +125,22 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
 
     @ti.func
     def sample_superficial(x):
-        """eps_f u_f interpolated to x, per component (the superficial velocity), and the eps_f of the 8 faces of
-        each component's CIC cube (row c, column CORNERS index), for the deposit in `couple`."""
+        """eps_f u_f interpolated to x, per component (the superficial velocity)."""
         out = ti.Vector([0.0, 0.0, 0.0])
-        eps_f = ti.Matrix.zero(fp, 3, 8)
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
             for q in ti.static(range(8)):
                 o = ti.Vector(CORNERS[q])
                 J = corner(base, o, c)
-                eps_f[c, q] = face_voidage(J, c)
-                out[c] += weight(frac, o) * eps_f[c, q] * U[c][J]
-        return out, eps_f
+                out[c] += weight(frac, o) * face_voidage(J, c) * U[c][J]
+        return out
 
     @ti.func
     def sample_cells(F: ti.template(), x):
         base, frac = cic(x, -1)
         out = 0.0
-        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+        for q in ti.static(range(8)):
+            o = ti.Vector(CORNERS[q])
             out += weight(frac, o) * F[corner(base, o, -1)]
         return out
 
@@ -153,7 +154,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         """T_g at x, with the mirror value 2 T_in - T_c below the bottom cell over the inlet."""
         base, frac = cic(x, -1)
         out = 0.0
-        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+        for q in ti.static(range(8)):
+            o = ti.Vector(CORNERS[q])
             J = corner(base, o, -1)
             t = G.T[J]
             if below_inlet(base, o, J):
@@ -176,7 +178,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         base, frac = lcic(x, -1)
         eps_l = 0.0
         open_l = 0.0
-        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+        for q in ti.static(range(8)):
+            o = ti.Vector(CORNERS[q])
             J = lcorner(base, o, -1)
             open_vol = 1.0
             if ti.static(cut_cells):
@@ -193,10 +196,14 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
 
     @ti.kernel
     def deposit_volume(n: ti.i32):
-        for I in ti.grouped(G.solid_vol):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             G.solid_vol[I] = 0.0
         if ti.static(layered):
-            for I in ti.grouped(G.solid_layer):
+            if ti.static(serial):
+                ti.loop_config(serialize=True)
+            for I in ti.grouped(ti.ndrange(*layer_cells)):
                 G.solid_layer[I] = 0.0
         if ti.static(ordered):
             ti.loop_config(serialize=True)  # sums in particle order: bit-identical runs on any thread count
@@ -204,44 +211,80 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             if S.active[i]:
                 base, frac = cic(S.x[i], -1)
                 vp = volume(i)
-                for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                for q in ti.static(range(8)):
+                    o = ti.Vector(CORNERS[q])
                     G.solid_vol[corner(base, o, -1)] += weight(frac, o) * vp
                 if ti.static(layered):
                     base, frac = lcic(S.x[i], -1)
-                    for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+                    for q in ti.static(range(8)):
+                        o = ti.Vector(CORNERS[q])
                         G.solid_layer[lcorner(base, o, -1)] += weight(frac, o) * vp
-        for I in ti.grouped(G.eps):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             G.eps_old[I] = G.eps[I]
             open_vol = 1.0
             if ti.static(cut_cells):
                 open_vol = G.open[I]
             G.eps[I] = ti.max(1.0 - G.solid_vol[I] * inv_vol / open_vol, min_voidage)
 
+    @ti.func
+    def deposit_exchange(i):
+        """Add particle i's frozen K_p (and H_p) to the faces' B, Bv (and the cells' H, HT) with its CIC weights."""
+        x = S.x[i]
+        k = S.gK[i]
+        for c in ti.static(range(3)):
+            base, frac = cic(x, c)
+            for q in ti.static(range(8)):
+                o = ti.Vector(CORNERS[q])
+                wk = weight(frac, o) * k
+                J = corner(base, o, c)
+                if ti.static(layered):
+                    B[c][J] += wk * face_voidage(J, c) / S.geps[i]
+                else:
+                    B[c][J] += wk
+                BV[c][J] += wk * S.v[i][c]
+        if ti.static(heat):
+            hp = S.gH[i]
+            base, frac = cic(x, -1)
+            for q in ti.static(range(8)):
+                o = ti.Vector(CORNERS[q])
+                J = corner(base, o, -1)
+                wh = weight(frac, o) * hp
+                if below_inlet(base, o, J):
+                    G.H[J] -= wh
+                    G.HT[J] += wh * (S.T[i] - 2.0 * t_in)
+                else:
+                    G.H[J] += wh
+                    G.HT[J] += wh * S.T[i]
+
     @ti.kernel
     def couple(n: ti.i32) -> ti.f64:
-        """Freeze K_p (and H_p) and deposit them; return max over particles of K_p / m_p [1/s]."""
+        """Freeze K_p (and H_p), each particle in parallel, then deposit them (in particle order on the
+        CPU); return max over particles of K_p / m_p [1/s]."""
         for c in ti.static(range(3)):
-            for I in ti.grouped(B[c]):
+            if ti.static(serial):
+                ti.loop_config(serialize=True)
+            for I in ti.grouped(ti.ndrange(*faces[c])):
                 B[c][I] = 0.0
                 BV[c][I] = 0.0
         if ti.static(heat):
             G.heat_rate[0] = 0.0
-            for I in ti.grouped(G.H):
+            if ti.static(serial):
+                ti.loop_config(serialize=True)
+            for I in ti.grouped(ti.ndrange(*cells)):
                 G.H[I] = 0.0
                 G.HT[I] = 0.0
         rate = 0.0
-        if ti.static(ordered):
-            ti.loop_config(serialize=True)  # deposits summed in particle order (determinism)
         for i in range(n):
             if S.active[i]:
                 x = S.x[i]
                 eps = 0.0
                 u = ti.Vector([0.0, 0.0, 0.0])
-                eps_f = ti.Matrix.zero(fp, 3, 8)  # layered: the faces' eps_f (`sample_superficial`)
                 scale = 1.0  # layered: eps_c / eps_p (the grain's whole fluid force at its own voidage)
                 if ti.static(layered):
                     eps = layered_voidage(x, volume(i))
-                    u, eps_f = sample_superficial(x)
+                    u = sample_superficial(x)
                     u /= eps
                     scale = ti.min(sample_cells(G.eps, x) / eps, MAX_SCALE)
                 else:
@@ -260,17 +303,6 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 S.gK[i] = k
                 S.geps[i] = eps
                 ti.atomic_max(rate, k * S.inv_mass[i])
-                for c in ti.static(range(3)):
-                    base, frac = cic(x, c)
-                    for q in ti.static(range(8)):
-                        o = ti.Vector(CORNERS[q])
-                        wk = weight(frac, o) * k
-                        J = corner(base, o, c)
-                        if ti.static(layered):
-                            B[c][J] += wk * eps_f[c, q] / eps
-                        else:
-                            B[c][J] += wk
-                        BV[c][J] += wk * S.v[i][c]
                 if ti.static(heat):
                     h = nusselt(eps, d, w) * k_gas / d
                     hp = grains * h * math.pi * d * d
@@ -280,16 +312,11 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                         if S.rx[i] >= 0:  # reacting: shrinks to nothing; kernels/reactions.py bounds its T
                             heat_rate = 0.0
                     ti.atomic_max(G.heat_rate[0], heat_rate)
-                    base, frac = cic(x, -1)
-                    for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
-                        J = corner(base, o, -1)
-                        wh = weight(frac, o) * hp
-                        if below_inlet(base, o, J):
-                            G.H[J] -= wh
-                            G.HT[J] += wh * (S.T[i] - 2.0 * t_in)
-                        else:
-                            G.H[J] += wh
-                            G.HT[J] += wh * S.T[i]
+        if ti.static(ordered):
+            ti.loop_config(serialize=True)  # deposits summed in particle order (determinism)
+        for i in range(n):
+            if S.active[i]:
+                deposit_exchange(i)
         return rate
 
     @ti.kernel
@@ -298,8 +325,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             if S.active[i]:
                 x = S.x[i]
                 if ti.static(layered):
-                    superficial, _eps_f = sample_superficial(x)
-                    S.gu[i] = superficial / S.geps[i]
+                    S.gu[i] = sample_superficial(x) / S.geps[i]
                 else:
                     S.gu[i] = sample_faces(U, x)
                 S.ggp[i] = sample_faces(GP, x)

@@ -30,7 +30,7 @@ summed into wall_rate [W] and, over time, wall_energy [J].
 
 import taichi as ti
 
-from .gas_grid import CLOSED, INLET, INTERIOR
+from .gas_grid import CLOSED, INLET, INTERIOR, serial_loops
 from .ordered import in_order
 
 EPS_PACKED = 0.4  # voidage of the packed emulsion in the "martin_nilles" tube convection (Martin & Nilles' beds)
@@ -49,6 +49,8 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
     h = ti.Vector(list(gg.h))
     vol = gg.volume
     ordered = in_order()
+    serial = serial_loops(gg)  # the grid's loops in one thread (small grids on the CPU)
+    cells = tuple(n)
     area = ti.Vector([gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]])
     U, K = G.u, G.kind
     unit, cell_index, face_index, face_eps = index.unit, index.cell_index, index.face_index, index.face_eps
@@ -164,9 +166,13 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
         with `sources`, plus the heat Qs [J] particles handed to the gas, and the enthalpy that
         entered through the inlet and outlet summed in bsum[0] [J]."""
         if ti.static(tube_walls):
-            for k in G.wall_rate:
+            if ti.static(serial):
+                ti.loop_config(serialize=True)
+            for k in range(G.wall_rate.shape[0]):
                 G.wall_rate[k] = 0.0
-        for I in ti.grouped(G.T):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             G.T_new[I] = G.T[I]
             if G.solid[I] == 0:
                 net, boundary = upwind(G.T, I, t_in, True)
@@ -185,12 +191,14 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
                         hw_tw = hw * G.wall_T[I]
                 G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw_tw) + extra) \
                     / (rho_c * G.eps[I] * vol + dt * (G.H[I] + hw))
-        for I in ti.grouped(G.T):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             G.T[I] = G.T_new[I]
         if ti.static(tube_walls):
-            if ti.static(ordered):
+            if ti.static(serial or ordered):
                 ti.loop_config(serialize=True)  # each tube's heat flow summed in cell order: the same bits every run
-            for I in ti.grouped(G.T):
+            for I in ti.grouped(ti.ndrange(*cells)):
                 if G.solid[I] == 0 and G.wall_A[I] > 0.0:
                     flow = wall_conductance(I) * (G.wall_T[I] - G.T[I])
                     G.wall_rate[G.wall_k[I]] += flow

@@ -15,7 +15,8 @@ deposited drag coefficients of `gas_coupling`, per cell volume V):
       a symmetric positive definite system for -p, solved by Jacobi-preconditioned CG to a
       relative residual `tolerance`, warm-started from the last pressure (in one thread
       for small grids on the CPU, `cg_serial`; else in parallel, its scalars kept on the device,
-      one launch per iteration on the CPU and per 8 on a GPU, `cg_iterate`).
+      one launch per iteration on the CPU and per 8 on a GPU, `cg_iterate`); thin grids on the
+      CPU solve it directly instead (banded Cholesky, `kernels/gas_band.py`).
 Boundaries: inlet faces at the bottom carry a set superficial velocity (eps_f u_f = U_in);
 the top is a pressure outlet (p = 0 on the face); other box sides and faces of solid cells
 (cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
@@ -27,8 +28,9 @@ from types import SimpleNamespace
 
 import taichi as ti
 
+from .gas_band import make_band_solve
 from .gas_energy import make_energy_kernels
-from .gas_grid import CLOSED, INLET, OUTLET, make_cic
+from .gas_grid import CLOSED, CORNERS, INLET, OUTLET, make_cic, serial_loops
 from .ordered import in_order
 
 SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster, deterministic)
@@ -56,16 +58,20 @@ def cg_batch() -> int:
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
                       tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
                       conduction: bool = False, wall_grain: float = 0.0,
-                      wall_umf: float = 0.0):
+                      wall_umf: float = 0.0, band: int = 0):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas_fields`); `tube_walls`
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy;
     with `wall_grain` > 0, the grains' diameter, the packed-bed term in the particle-filled share, its
     velocity capped at `wall_umf`),
     `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
-    `conduction` Fourier conduction through the gas."""
+    `conduction` Fourier conduction through the gas; `band` > 0 (`gas_band.band_width`) adds the direct
+    pressure solve band_solve (fields band, band_y)."""
     cic, corner, weight = make_cic(gg)
     n = gg.cells
     small = serial_solve(n[0] * n[1] * n[2])
+    serial = serial_loops(gg)
+    cells = tuple(n)
+    faces = [gg.face_shape(c) for c in range(3)]
     batch = cg_batch()
     per = gg.periodic
     h = ti.Vector(list(gg.h))
@@ -111,14 +117,17 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     def sample(F: ti.template(), c: ti.template(), x):
         base, frac = cic(x, c)
         out = 0.0
-        for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+        for q in ti.static(range(8)):
+            o = ti.Vector(CORNERS[q])
             out += weight(frac, o) * F[corner(base, o, c)]
         return out
 
     @ti.kernel
     def predict(dt: ti.f64):
         for c in ti.static(range(3)):
-            for I in ti.grouped(U[c]):
+            if ti.static(serial):
+                ti.loop_config(serialize=True)
+            for I in ti.grouped(ti.ndrange(*faces[c])):
                 kind = K[c][I]
                 ef = face_eps(I, c)
                 if kind == INLET:
@@ -173,9 +182,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     def assemble(dt: ti.f64) -> ti.f64:
         """rhs b = -(div(eps u*) + d eps/dt), Jacobi diagonal; return |b|^2."""
         bb = 0.0
-        if ti.static(small):
+        if ti.static(serial or small):
             ti.loop_config(serialize=True)  # |b|^2 in cell order, so the CG stops at the same iteration every run
-        for I in ti.grouped(G.p):
+        for I in ti.grouped(ti.ndrange(*cells)):
             b = 0.0
             dg = 1.0
             if G.solid[I] == 0:
@@ -304,7 +313,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     @ti.kernel
     def correct():
         """Extend p into solid cells, pressure gradient on every face, u = u* - A grad p."""
-        for I in ti.grouped(G.p):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             if G.solid[I] == 1:
                 s = 0.0
                 m = 0
@@ -316,7 +327,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                             m += 1
                 G.p[I] = s / ti.max(m, 1)
         for c in ti.static(range(3)):
-            for I in ti.grouped(U[c]):
+            if ti.static(serial):
+                ti.loop_config(serialize=True)
+            for I in ti.grouped(ti.ndrange(*faces[c])):
                 e = unit(c)
                 grad = 0.0
                 inside = 1
@@ -342,7 +355,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     def divergence(dt: ti.f64) -> ti.f64:
         """max over fluid cells of |d eps/dt + div(eps u)| [1/s] after the correction."""
         worst = 0.0
-        for I in ti.grouped(G.p):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             if G.solid[I] == 0:
                 div = (G.eps[I] - G.eps_old[I]) / dt
                 for c in ti.static(range(3)):
@@ -356,13 +371,17 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
         """Largest face Courant number |u| dt / h."""
         worst = 0.0
         for c in ti.static(range(3)):
-            for I in ti.grouped(U[c]):
+            if ti.static(serial):
+                ti.loop_config(serialize=True)
+            for I in ti.grouped(ti.ndrange(*faces[c])):
                 ti.atomic_max(worst, ti.abs(U[c][I]) * dt / h[c])
         return worst
 
     kernels = dict(predict=predict, assemble=assemble, cg_start=cg_start, cg_iterate=cg_iterate, cg_serial=cg_serial,
                    correct=correct, divergence=divergence, courant=courant)
-    index = SimpleNamespace(unit=unit, cell_index=cell_index, face_index=face_index, face_eps=face_eps)
+    index = SimpleNamespace(unit=unit, cell_index=cell_index, face_index=face_index, face_eps=face_eps, apply=apply)
+    if band:
+        kernels["band_solve"] = make_band_solve(gg, G, index, band)
     kernels.update(make_energy_kernels(gg, G, index, rho, mu, heat, rho_c, tube_walls, k_gas, prandtl, sources,
                                        conduction, wall_grain, wall_umf))
     return kernels

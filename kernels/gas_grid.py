@@ -18,7 +18,14 @@ from dataclasses import dataclass
 
 import taichi as ti
 
+from .ordered import in_order
+
 CLOSED, INTERIOR, INLET, OUTLET = 0, 1, 2, 3  # kinds of a face: wall, between cells, inlet, outlet
+# The 8 corners of a CIC cube (0/1 per axis, the last axis fastest). Loops over them as
+# `for q in ti.static(range(8)): o = ti.Vector(CORNERS[q])` keep o a compile-time constant, so the weights
+# fold; `ti.static(ti.grouped(ti.ndrange(2, 2, 2)))` left them run-time values: the deposit of
+# `gas_coupling.couple` took 2.25 against 1.53 ms a gas step of fluidized_tube (measured).
+CORNERS = [(q // 4, q // 2 % 2, q % 2) for q in range(8)]
 
 
 @dataclass(frozen=True)
@@ -42,6 +49,17 @@ class GasGrid:
 
     def center(self, idx) -> tuple[float, float, float]:
         return tuple(self.lo[a] + (idx[a] + 0.5) * self.h[a] for a in range(3))
+
+
+SERIAL_GRID_CELLS = 4096  # grids up to this size take their per-cell and per-face loops in one thread on the CPU
+
+
+def serial_loops(gg: GasGrid) -> bool:
+    """Whether the per-cell and per-face loops of grid `gg` run in one thread, in cell order: grids of up to
+    SERIAL_GRID_CELLS cells on the CPU, where waking Taichi's thread pool for a loop costs more than the
+    loop's work (about 50 us a loop on 2 cores against a few us for 1000 cells, `benchmarks/README.md`). Their
+    sums (the tubes' heat flows, |b|^2) are then taken in one order: the same bits on any thread count."""
+    return gg.cells[0] * gg.cells[1] * gg.cells[2] <= SERIAL_GRID_CELLS and in_order()
 
 
 def layer_grid(gg: GasGrid, layers: int) -> GasGrid:

@@ -48,7 +48,7 @@ import math
 
 import taichi as ti
 
-from .gas_grid import make_cic
+from .gas_grid import CORNERS, make_cic
 from .ordered import in_order
 
 CHAR, POLY, SUBL = 0, 1, 2
@@ -69,7 +69,8 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
     def deposit(F: ti.template(), x, amount):
         if ti.static(gas):
             base, frac = cic(x, -1)
-            for o in ti.static(ti.grouped(ti.ndrange(2, 2, 2))):
+            for q in ti.static(range(8)):
+                o = ti.Vector(CORNERS[q])
                 ti.atomic_add(F[corner(base, o, -1)], weight(frac, o) * amount)
 
     @ti.func

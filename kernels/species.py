@@ -14,16 +14,22 @@ inlet and outlet is summed in bsum[1] [kg], so O2 in the gas + O2 consumed - bsu
 
 import taichi as ti
 
+from .gas_grid import serial_loops
+
 
 def make_species_kernel(gg, G, flow: dict, rho: float, diffusivity: float):
     """Return `species(dt, y_in)` advancing G.Y by one gas step."""
     vol = gg.volume
+    serial = serial_loops(gg)  # the grid's loops in one thread (small grids on the CPU)
+    cells = tuple(gg.cells)
     upwind, interior_diffusion = flow["upwind"], flow["interior_diffusion"]
 
     @ti.kernel
     def species(dt: ti.f64, y_in: ti.f64):
         G.bsum[2] = 0.0
-        for I in ti.grouped(G.Y):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             G.Y_new[I] = G.Y[I]
             if G.solid[I] == 0:
                 net, boundary = upwind(G.Y, I, y_in, False)
@@ -35,7 +41,9 @@ def make_species_kernel(gg, G, flow: dict, rho: float, diffusivity: float):
                 if y < 0.0:
                     ti.atomic_min(G.bsum[2], y)
                 G.Y_new[I] = y
-        for I in ti.grouped(G.Y):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
+        for I in ti.grouped(ti.ndrange(*cells)):
             G.Y[I] = G.Y_new[I]
 
     return species

@@ -20,6 +20,7 @@ import taichi as ti
 
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.gas_coupling import make_coupling_kernels
+from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
 from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
@@ -75,8 +76,9 @@ class GasPhase:
             open_fraction = np.clip(self.cut.open_fraction * (1.0 if open_fraction is None else open_fraction),
                                     MIN_OPEN, 1.0)
         self.layers = voidage_layers(model)
+        self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes), self.heat,
-                                                 self.sources, self.species, open_fraction, self.layers)
+                                                 self.sources, self.species, open_fraction, self.layers, self.band)
         G = self.G
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
@@ -89,7 +91,7 @@ class GasPhase:
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
-                                      self.heat and gas.conduction, wall_grain, wall_umf)
+                                      self.heat and gas.conduction, wall_grain, wall_umf, self.band)
         self.serial_solve = serial_solve(self.solid.size)  # as make_flow_kernels decided
         self.cg_batch = cg_batch()
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
@@ -130,7 +132,7 @@ class GasPhase:
         f = self.flow
         lap = self.timer.lap
         start = clock()
-        if self.gas.inlet_ramp > 0:
+        if self.inlet_scale < 1.0:  # ramping up
             self.set_inlet(t)
         self._deposit(self.n)
         rate = self._couple(self.n)
@@ -172,11 +174,18 @@ class GasPhase:
         self.steps += 1
 
     def _project(self, dt: float) -> None:
-        """Solve for p by Jacobi-preconditioned CG (module `kernels/gas_flow`)."""
+        """Solve for p directly on thin grids (banded Cholesky, `kernels/gas_band.py`; 0 iterations), else by
+        Jacobi-preconditioned CG (`kernels/gas_flow.py`), also where the direct solve finds the system singular."""
         f, G = self.flow, self.G
         bb = f["assemble"](dt)
         u_scale = max(float(np.abs(self.inlet).max()) * self.inlet_scale, 1e-3)
         scale = max(math.sqrt(bb), u_scale / min(self.gg.h) * math.sqrt(self.solid.size))
+        if self.band:
+            rr = f["band_solve"]()
+            if rr >= 0.0:
+                self._finish(0, math.sqrt(rr) / scale)
+                return
+            self.band = 0  # singular (a fluid region without an outlet): the CG from now on
         if self.serial_solve:
             it = f["cg_serial"](self.gas.max_iterations, self.tol * scale)
             self._finish(it, math.sqrt(max(float(G.sums[RR]), 0.0)) / scale)

@@ -30,10 +30,11 @@ from tidem.kernels.gas_grid import GasGrid
 
 def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarray], walls: dict | None,
                         n_tubes: int, heat: bool, sources: bool, species: bool, open_fraction: np.ndarray | None = None,
-                        layers: int = 1):
+                        layers: int = 1, band: int = 0):
     """Place the fields a scene's gas needs and fill the fixed ones (solid cells, face kinds,
     tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree). With `layers` > 1,
-    solid_layer: the solid volume on cells cut into that many horizontal layers (`kernels/gas_coupling.py`)."""
+    solid_layer: the solid volume on cells cut into that many horizontal layers (`kernels/gas_coupling.py`). With
+    `band` = w > 0, band (cells x w + 1) and band_y (cells) for the direct pressure solve (`kernels/gas_band.py`)."""
     G = SimpleNamespace()
     fb = ti.FieldsBuilder()
     cell_names = ["eps", "eps_old", "solid_vol", "p", "rhs", "diag", "cg_r", "cg_d", "cg_q"]
@@ -53,6 +54,11 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         fb.dense(ti.ijk, (gg.cells[0], gg.cells[1], gg.cells[2] * layers)).place(G.solid_layer)
     G.solid = ti.field(ti.i32)
     fb.dense(ti.ijk, gg.cells).place(G.solid)
+    if band:
+        cells = gg.cells[0] * gg.cells[1] * gg.cells[2]
+        G.band, G.band_y = ti.field(ti.f64), ti.field(ti.f64)
+        fb.dense(ti.ij, (cells, band + 1)).place(G.band)
+        fb.dense(ti.i, cells).place(G.band_y)
     for name, dtype in (("u", fp), ("us", fp), ("A", fp), ("C", fp), ("gp", fp), ("B", fp), ("Bv", fp),
                         ("kind", ti.i32)):
         comps = [ti.field(dtype) for _ in range(3)]
