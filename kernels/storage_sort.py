@@ -1,14 +1,16 @@
-"""A storage sort on the device: every per-particle field permuted into the order in `S.sorted_idx`
-(the broad phase's cell order, `kernels/broadphase.py` `cell_order`) without leaving the GPU.
+"""A storage sort in place: every per-particle field permuted into the order in `S.sorted_idx`
+without a copy through the host.
 
-The CPU sorts on the host (`tidem.storage_order`: a stable numpy sort, so that float64 runs stay
-bit-identical); on a GPU that copied every particle field to the host and back at every sort (about
-1 kB a particle: 0.7 GB for the 700 000-grain laboratory bed). Here each field is gathered into a
-scratch twin, field[order[k]] -> twin[k], and copied back; partner indices in the Verlet rows are
-renumbered (renumber[order[k]] = k; a slot past the row's length holds -1), each row keeping its
-order and history, as the host sort does (steps 2-3 of `tidem.storage_order`). Within a cell the
-order is the counting sort's, which atomics decide: runs on a GPU are not bit-reproducible anyway
-(`kernels/ordered.py`).
+On a GPU the order is the broad phase's cell order (`kernels/broadphase.py` `cell_order`), whose ties
+the counting sort's atomics decide: runs there are not bit-reproducible anyway (`kernels/ordered.py`).
+On the CPU the host computes the order (`tidem.storage_order`: a stable numpy sort, so that float64
+runs stay bit-identical) and this kernel moves the fields: copying every field to the host and back
+took 25 ms a sort of fluidized_tube's 13 000 grains, most of it a launch per field and direction,
+and on a GPU about 1 kB a particle crossed the bus (0.7 GB for the 700 000-grain laboratory bed).
+Each field is gathered into a scratch twin, field[order[k]] -> twin[k], and copied back, all fields
+in one loop each way; partner indices in the Verlet rows are renumbered (renumber[order[k]] = k; a
+slot past the row's length holds -1), each row keeping its order and history (steps 2-3 of
+`tidem.storage_order`).
 """
 
 import taichi as ti
@@ -36,24 +38,24 @@ def make_storage_permuter(S, names):
     def permute(n: ti.i32):
         for k in range(n):
             renumber[S.sorted_idx[k]] = k
-        for i, k in ti.ndrange(n, K):  # before nbr_n is permuted: each row's length where it was
+        for i in range(n):  # gather: row i takes particle sorted_idx[i]'s values
             old = S.sorted_idx[i]
-            nbr_twin[i, k] = renumber[S.nbr[old, k]] if k < S.nbr_n[old] else -1
-        for field, twin in ti.static(plain):
-            if ti.static(len(field.shape) == 1):
-                for k in range(n):
-                    twin[k] = field[S.sorted_idx[k]]
-            else:
-                for k, j in ti.ndrange(n, field.shape[1]):
-                    twin[k, j] = field[S.sorted_idx[k], j]
-        for i, k in ti.ndrange(n, K):
-            S.nbr[i, k] = nbr_twin[i, k]
-        for field, twin in ti.static(plain):
-            if ti.static(len(field.shape) == 1):
-                for k in range(n):
-                    field[k] = twin[k]
-            else:
-                for k, j in ti.ndrange(n, field.shape[1]):
-                    field[k, j] = twin[k, j]
+            for k in range(K):  # before nbr_n is permuted: each row's length where it was
+                nbr_twin[i, k] = renumber[S.nbr[old, k]] if k < S.nbr_n[old] else -1
+            for field, twin in ti.static(plain):
+                if ti.static(len(field.shape) == 1):
+                    twin[i] = field[old]
+                else:
+                    for j in range(field.shape[1]):
+                        twin[i, j] = field[old, j]
+        for i in range(n):
+            for k in range(K):
+                S.nbr[i, k] = nbr_twin[i, k]
+            for field, twin in ti.static(plain):
+                if ti.static(len(field.shape) == 1):
+                    field[i] = twin[i]
+                else:
+                    for j in range(field.shape[1]):
+                        field[i, j] = twin[i, j]
 
     return permute

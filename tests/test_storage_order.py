@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.storage_order import SORT_MIN_PARTICLES, new_order, permute_storage, scene_order
+from tidem.kernels.storage_sort import make_storage_permuter
+from tidem.storage_order import SCRATCH, SORT_MIN_PARTICLES, new_order, permute_storage, scene_order
 
 N_SIDE = (12, 10, 10)  # 1200 spheres, above SORT_MIN_PARTICLES
 
@@ -58,7 +59,9 @@ def test_a_shuffled_storage_mid_run_follows_the_same_trajectories(solver_for):
     plain = run(solver_for, raw, 0, 150)
     shuffled = run(solver_for, raw, 0, 150)
     assert (plain.state.ft.to_numpy() ** 2).sum() > 0, "contacts must hold tangential history"
-    permute_storage(shuffled.state, np.random.default_rng(1).permutation(shuffled.n))
+    names = [name for name in shuffled.state.particle_fields if name not in SCRATCH]
+    permute = make_storage_permuter(shuffled.state, names)
+    permute_storage(shuffled.state, permute, np.random.default_rng(1).permutation(shuffled.n), shuffled.n)
     shuffled.rebuild()
     for _ in range(150):
         plain.step()
@@ -101,9 +104,7 @@ def test_the_device_sort_of_a_gpu_permutes_fields_and_partners_as_the_host_sort(
     the same partners (by scene index) with its history, unused slots -1; the bed then follows the
     host-sorted run's trajectories to rounding. A partner left unrenumbered, or a row moved
     without its history, moves the bed by 1e-6 m and more."""
-    from tidem.kernels.storage_sort import make_storage_permuter
     from tidem.placement import spatial_key
-    from tidem.storage_order import SCRATCH
 
     raw = shuffled_bed(3)
     host, device = run(solver_for, raw, 0, 150), run(solver_for, raw, 0, 150)

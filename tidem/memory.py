@@ -25,6 +25,7 @@ from tidem.gas_geometry import gas_grid, layers_for, voidage_layers
 from tidem.mesh_bins import mesh_field_bytes
 from tidem.scene.averaging_layout import cell_grid
 from tidem.scene.sizes import largest_parcel, max_diameter, parcel_count
+from tidem.storage_order import sorts_storage
 
 RUNTIME_BYTES = 172 * 2**20  # peak RSS of a run less fields and host arrays (measured, float64 bed of 20k)
 HOST_BYTES_PER_PARTICLE = 1050  # numpy arrays of the scene and of the read-backs (measured, 20k vs 126k)
@@ -194,6 +195,9 @@ def scene_items(scene) -> list[Item]:
         items.append(Item(f"the neighbour and contact-history tables ({k} rows of {format_count(total)} particles)",
                           total * neighbor_bytes(feat, k), "numerics.max_neighbors",
                           "use fewer particles or a smaller numerics.max_neighbors"))
+    pours = any(g.pour is not None for g in scene.particles)
+    if sorts_storage(feat, int(total), pours, num.sort_interval):
+        items.append(sort_item(total, particle_field_bytes(feat, k, w) + neighbor_bytes(feat, k)))
     lengths = [hi - lo for lo, hi in zip(scene.domain.min, scene.domain.max)]
     reach = dmax * (1 + num.skin + 0.5 * fluid)
     cells = min(math.prod(max(1.0, math.floor(n / reach)) for n in lengths), max(64 * total, 2.0**20))
@@ -241,15 +245,33 @@ def model_items(model) -> list[Item]:
                   "use a smaller numerics.max_neighbors or fewer particles"),
              Item(f"the {format_count(model.grid.n_cells)} broad-phase cells", model.grid.n_cells * CELL_BYTES,
                   "domain", "use a smaller domain")]
+    if sorts_storage(f, n, bool(model.pours), model.scene.numerics.sort_interval):
+        items.append(sort_item(n, sort_bytes(model)))
     items += [Item(it.what, it.bytes, it.key, it.fix) for it in scene_items(model.scene)
               if it.key in ("gas.cell_size", "averaging.cell_size")]
     return items
+
+
+def sort_bytes(model) -> int:
+    """Bytes per particle of the storage sort's scratch twins (`kernels/storage_sort.py`): a copy of every
+    particle field and table row, or 0 where the run does not sort."""
+    f = model.features
+    if not sorts_storage(f, model.capacity, bool(model.pours), model.scene.numerics.sort_interval):
+        return 0
+    return particle_field_bytes(f, model.max_neighbors, model.wall_slots) + neighbor_bytes(f, model.max_neighbors)
+
+
+def sort_item(particles: float, per: int) -> Item:
+    """The storage sort's scratch copy of the particle fields, `per` bytes a particle."""
+    return Item(f"the storage sort's scratch copy of the particle fields ({per} B a particle)", particles * per,
+                "numerics.sort_interval", "set numerics.sort_interval = 0 (no re-sort) or use fewer particles")
 
 
 def field_bytes(model) -> int:
     """Expected memory of the Taichi fields of a built Model [bytes] (see `tidem.state.State`)."""
     f = model.features
     per = particle_field_bytes(f, model.max_neighbors, model.wall_slots) + neighbor_bytes(f, model.max_neighbors)
+    per += sort_bytes(model)
     cells = model.grid.n_cells * CELL_BYTES
     if f.gas:
         cells += math.prod(gas_grid(model.scene).cells) * gas_cell_bytes(f, voidage_layers(model))

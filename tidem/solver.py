@@ -44,7 +44,7 @@ from tidem.pour import Pourer
 from tidem.runtime import hot
 from tidem.state import State, allocate
 from tidem.state_fill import load_bins
-from tidem.storage_order import SCRATCH, SORT_MIN_PARTICLES, sort_storage
+from tidem.storage_order import SCRATCH, sort_storage, sorts_storage
 from tidem.surfaces import is_heated
 
 
@@ -93,12 +93,10 @@ class Solver:
         self._rebuild_disp2 = (0.5 * model.skin) ** 2  # kick_drift leaves the largest displacement squared
         heat = model.scene.heat
         self._conduct_every = heat.conduction_interval if heat is not None else 1  # steps per conduction evaluation
-        # scenes whose outputs follow particles by storage index (pours, reactions, contact timing) keep their
-        # order, and so do small ones, which fit in cache whatever their order
-        sortable = f.contacts and self.n >= SORT_MIN_PARTICLES and not (model.pours or f.reactions or f.contact_time)
+        sortable = sorts_storage(f, self.n, bool(model.pours), model.scene.numerics.sort_interval)
         self._sort_every = model.scene.numerics.sort_interval if sortable else 0
-        self._permute = None  # a GPU sorts on the device (kernels/storage_sort.py), the CPU on the host
-        if self._sort_every and not in_order():
+        self._permute = None  # the fields moved on the device (kernels/storage_sort.py), the CPU's order from the host
+        if self._sort_every:
             self._permute = make_storage_permuter(self.state, [
                 name for name in self.state.particle_fields if name not in SCRATCH])
         self.start()
@@ -279,11 +277,12 @@ class Solver:
             self.mesh_t_build = self.t
         if self._rebuild is not None:
             if self._sort_every and self.rebuilds % self._sort_every == 0:
-                if self._permute is not None:
+                if in_order():
+                    sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size), self._permute,
+                                 self.n)
+                else:
                     self._cell_order(self.n)
                     self._permute(self.n)
-                else:
-                    sort_storage(self.state, self.model.grid.lo, np.array(self.model.grid.cell_size))
                 if phase_start is not None:
                     phase_start = self.timer.lap("storage sort", phase_start)
             self._rebuild(self.n)
