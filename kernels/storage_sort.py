@@ -34,6 +34,15 @@ def make_storage_permuter(S, names):
     renumber = ti.field(ti.i32, shape=S.x.shape[0])
     K = S.nbr.shape[1]
 
+    @ti.func
+    def copy_row(dst: ti.template(), i, src: ti.template(), j):
+        """dst[i] = src[j]: one particle's value, or its row of a [capacity, K] field."""
+        if ti.static(len(dst.shape) == 1):
+            dst[i] = src[j]
+        else:
+            for k in range(dst.shape[1]):
+                dst[i, k] = src[j, k]
+
     @ti.kernel
     def permute(n: ti.i32):
         for k in range(n):
@@ -43,19 +52,10 @@ def make_storage_permuter(S, names):
             for k in range(K):  # before nbr_n is permuted: each row's length where it was
                 nbr_twin[i, k] = renumber[S.nbr[old, k]] if k < S.nbr_n[old] else -1
             for field, twin in ti.static(plain):
-                if ti.static(len(field.shape) == 1):
-                    twin[i] = field[old]
-                else:
-                    for j in range(field.shape[1]):
-                        twin[i, j] = field[old, j]
+                copy_row(twin, i, field, old)
         for i in range(n):
-            for k in range(K):
-                S.nbr[i, k] = nbr_twin[i, k]
+            copy_row(S.nbr, i, nbr_twin, i)
             for field, twin in ti.static(plain):
-                if ti.static(len(field.shape) == 1):
-                    field[i] = twin[i]
-                else:
-                    for j in range(field.shape[1]):
-                        field[i, j] = twin[i, j]
+                copy_row(field, i, twin, i)
 
     return permute
