@@ -10,7 +10,8 @@ At each gas step (every `coupling_interval` DEM steps):
                   coefficient K_p (`drag.make_drag`) and heat conductance H_p = h_p pi d^2
                   (`drag.make_nusselt`) are frozen until the next gas step (the largest
                   H_p / (m_p c_p) of a non-reacting particle is kept in G.heat_rate for the
-                  step limit); K_p w_pf is added
+                  step limit); then (a second loop: the coefficients in parallel, the deposits
+                  in particle order on the CPU) K_p w_pf is added
                   to face f's implicit drag coefficient B_f and K_p w_pf v_p to Bv_f, and with
                   heat H_p w_pc to the cell's H_c and H_p w_pc T_p to HT_c.
                   Layered (m > 1, `gas.voidage = "layered"`): eps_p from the layers
