@@ -65,7 +65,7 @@ def make_band_solve(gg, G, index, width: int):
         return I
 
     @ti.func
-    def couple(m, J, cf, kind):
+    def add_face(m, J, cf, kind):
         """Row m's share of a face of kind `kind` and coefficient cf towards cell J."""
         if kind == OUTLET:
             G.band[m, 0] += cf
@@ -90,9 +90,9 @@ def make_band_solve(gg, G, index, width: int):
                 else:
                     for c in ti.static(range(3)):
                         e = unit(c)
-                        couple(m, cell_index(I - e), C[c][I], K[c][I])
+                        add_face(m, cell_index(I - e), C[c][I], K[c][I])
                         f = face_index(I + e, c)
-                        couple(m, cell_index(I + e), C[c][f], K[c][f])
+                        add_face(m, cell_index(I + e), C[c][f], K[c][f])
             ok = 1
             for m in range(cells):  # M = L L^T, L's row m in G.band[m, m - k] for k = m - w .. m
                 if ok == 1:

@@ -196,7 +196,7 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
         for I in ti.grouped(ti.ndrange(*cells)):
             G.T[I] = G.T_new[I]
         if ti.static(tube_walls):
-            if ti.static(serial or ordered):
+            if ti.static(ordered):
                 ti.loop_config(serialize=True)  # each tube's heat flow summed in cell order: the same bits every run
             for I in ti.grouped(ti.ndrange(*cells)):
                 if G.solid[I] == 0 and G.wall_A[I] > 0.0:

@@ -182,7 +182,7 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     def assemble(dt: ti.f64) -> ti.f64:
         """rhs b = -(div(eps u*) + d eps/dt), Jacobi diagonal; return |b|^2."""
         bb = 0.0
-        if ti.static(serial or small):
+        if ti.static(small):
             ti.loop_config(serialize=True)  # |b|^2 in cell order, so the CG stops at the same iteration every run
         for I in ti.grouped(ti.ndrange(*cells)):
             b = 0.0

@@ -19,8 +19,8 @@ import numpy as np
 import taichi as ti
 
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
-from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_band import band_width
+from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
 from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel

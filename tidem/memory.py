@@ -245,8 +245,8 @@ def model_items(model) -> list[Item]:
                   "use a smaller numerics.max_neighbors or fewer particles"),
              Item(f"the {format_count(model.grid.n_cells)} broad-phase cells", model.grid.n_cells * CELL_BYTES,
                   "domain", "use a smaller domain")]
-    if sorts_storage(f, n, bool(model.pours), model.scene.numerics.sort_interval):
-        items.append(sort_item(n, sort_bytes(model)))
+    if per_sort := sort_bytes(model):
+        items.append(sort_item(n, per_sort))
     items += [Item(it.what, it.bytes, it.key, it.fix) for it in scene_items(model.scene)
               if it.key in ("gas.cell_size", "averaging.cell_size")]
     return items
