@@ -19,8 +19,8 @@ import typer
 
 from tidem import runtime
 from tidem.bench import bench_scene, profile_scene, tiled_bed
-from tidem.cli import _checkpoint
 from tidem.cli_common import build_or_exit, load_scene
+from tidem.launch import InputError, load_checkpoint
 from tidem.model import build_model
 from tidem.scene.load import validate
 
@@ -38,7 +38,11 @@ def main(scene: str, run_dir: str, steps: int = 1000, threads: int = 2, sets: li
         result = profile_scene(None, steps, 300, model)
     else:
         model = build_or_exit(loaded)
-        result = profile_scene(loaded, steps, 50, model, _checkpoint(Path(run_dir), loaded, model))
+        try:
+            start = load_checkpoint(Path(run_dir), loaded, model)
+        except InputError as exc:
+            sys.exit(f"tidem: {exc}")
+        result = profile_scene(loaded, steps, 50, model, start)
     print(f"{result['scene']}: {result['particles']} particles, {steps} steps, {threads} threads, "
           f"{result['particle_steps_per_s']:.3g} particle-steps/s")
     ti.profiler.print_kernel_profiler_info("count")

@@ -23,6 +23,8 @@ from pathlib import Path
 import numpy as np
 from taichi.lang.field import Field
 
+from tidem.kernels.field_copy import FieldCopier
+
 FILE = "checkpoint.npz"
 # 2: each pair in its owner's row only, the slabs (kernels/broadphase.py); 3: slabs across gravity
 # (kernels/geometry.py, slab_axis_for), which changes the owners of a bed's pairs
@@ -61,6 +63,14 @@ def _fields(solver) -> dict[str, Field]:
     return out
 
 
+def _copier(solver) -> FieldCopier:
+    """The host copier of every kept field (`kernels/field_copy.py`: one kernel launch per element
+    type, not a compiled kernel per field and direction), made at the solver's first checkpoint."""
+    if solver.field_copier is None:
+        solver.field_copier = FieldCopier(_fields(solver))
+    return solver.field_copier
+
+
 def _python_state(solver) -> dict:
     meta = {"t": solver.t, "steps": solver.steps, "rebuilds": solver.rebuilds, "profile_t0": solver.profile_t0,
             "mesh_t_build": solver.mesh_t_build, "mesh_t_binned": solver.mesh_t_binned}
@@ -77,7 +87,7 @@ def _python_state(solver) -> dict:
 def save(run_dir: Path, solver, loop: dict, scene_raw: dict) -> Path:
     """Write the checkpoint of `solver` (and the run loop's state `loop`) atomically."""
     run_dir = Path(run_dir)
-    arrays = {name: fld.to_numpy() for name, fld in _fields(solver).items()}
+    arrays = _copier(solver).read()
     meta = {"format": FORMAT, "precision": solver.model.features.precision, "solver": _python_state(solver),
             "loop": loop, "scene": scene_raw}
     arrays["meta"] = np.frombuffer(json.dumps(meta, default=float).encode(), dtype=np.uint8)
@@ -142,17 +152,17 @@ def check_scene(meta: dict, scene_raw: dict, precision: str) -> None:
 
 def restore(solver, meta: dict, arrays: dict) -> None:
     """Put the checkpoint's state into a Solver built from the same scene."""
-    fields = _fields(solver)
-    missing = sorted(set(fields) - set(arrays))
+    copier = _copier(solver)
+    missing = sorted(set(copier.slots) - set(arrays))
     if missing:
         raise CheckpointError(f"the checkpoint lacks {', '.join(missing[:5])}: it was made with other physics or by "
                               "another version of tidem; start a new run")
-    for name, fld in fields.items():
-        if arrays[name].shape != fld.to_numpy().shape:
+    for name in copier.slots:
+        if arrays[name].shape != copier.shape(name):
             raise CheckpointError(f"{name}: checkpoint shape {arrays[name].shape} does not match the scene's "
-                                  f"{fld.to_numpy().shape} (made by another version of tidem, or for other "
+                                  f"{copier.shape(name)} (made by another version of tidem, or for other "
                                   "capacities): start a new run")
-        fld.from_numpy(arrays[name])
+    copier.write(arrays)
     solver.state.nbr_gap.fill(0.0)  # no quiet partner skipped until the next neighbour build
     s = meta["solver"]
     solver.t, solver.steps, solver.rebuilds, solver.profile_t0 = s["t"], s["steps"], s["rebuilds"], s["profile_t0"]

@@ -19,6 +19,7 @@ import numpy as np
 import taichi as ti
 
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
+from tidem.kernels.field_copy import FieldCopier
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
@@ -80,6 +81,10 @@ class GasPhase:
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes), self.heat,
                                                  self.sources, self.species, open_fraction, self.layers, self.band)
         G = self.G
+        host = {"p": G.p, "gp2": G.gp[2], "eps": G.eps, **{f"u{c}": G.u[c] for c in range(3)}}
+        host.update({name: getattr(G, name) for name, on in (("T", self.heat), ("Y", self.species),
+                                                              ("wall_rate", self.walls)) if on})
+        self._host = FieldCopier(host)  # what samples and snapshots read, in one launch (`kernels/field_copy.py`)
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
         wall_grain, wall_umf = 0.0, 0.0
@@ -207,38 +212,46 @@ class GasPhase:
                 f"the pressure solve did not converge in {it} iterations (relative residual {self.residual:.2e}, "
                 f"tolerance {self.tol:.0e}): raise gas.max_iterations or gas.tolerance")
 
-    def pressure_drop(self) -> float:
-        """Mean pressure on the inlet faces [Pa] (p = 0 at the outlet), fluid cells only."""
-        p = self.G.p.to_numpy()[:, :, 0]
-        gp = self.G.gp[2].to_numpy()[:, :, 0]
+    def host_fields(self) -> dict[str, np.ndarray]:
+        """Pressure, its z gradient (gp2), voidage, face velocities (u0, u1, u2) and where solved the
+        temperature (T), O2 mass fraction (Y) and the tubes' heat flows (wall_rate), read together."""
+        return self._host.read()
+
+    def pressure_drop(self, host: dict | None = None) -> float:
+        """Mean pressure on the inlet faces [Pa] (p = 0 at the outlet), fluid cells only (from `host`,
+        `host_fields()`, where given)."""
+        host = host or self.host_fields()
+        p = host["p"][:, :, 0]
+        gp = host["gp2"][:, :, 0]
         open_ = self.kinds[2][:, :, 0] == INLET
         if not open_.any():
             return 0.0
         face = p - 0.5 * self.gg.h[2] * gp
         return float(face[open_].mean())
 
-    def probe_pressures(self) -> dict[str, float]:
+    def probe_pressures(self, host: dict) -> dict[str, float]:
         """{probe_column(z): pressure [Pa]} of each height z in gas.pressure_probes: the mean over the
         fluid cells of a horizontal layer, interpolated linearly between the two layers whose centres
-        bracket z (the lowest or highest layer beyond them); gauge, p = 0 at the outlet."""
+        bracket z (the lowest or highest layer beyond them); gauge, p = 0 at the outlet (`host`: `host_fields()`)."""
         if not self.gas.pressure_probes:
             return {}
         fluid = self.solid == 0
         count = fluid.sum(axis=(0, 1))
-        total = np.where(fluid, self.G.p.to_numpy(), 0.0).sum(axis=(0, 1))
+        total = np.where(fluid, host["p"], 0.0).sum(axis=(0, 1))
         means = np.divide(total, count, out=np.full(len(count), np.nan), where=count > 0)
         centres = self.gg.lo[2] + (np.arange(self.gg.cells[2]) + 0.5) * self.gg.h[2]
         return {probe_column(z): float(np.interp(z, centres, means)) for z in self.gas.pressure_probes}
 
     def summary(self) -> dict:
-        out = dict(gas_pressure_drop_Pa=self.pressure_drop(), gas_cg_iterations=self.iterations,
+        host = self.host_fields()
+        out = dict(gas_pressure_drop_Pa=self.pressure_drop(host), gas_cg_iterations=self.iterations,
                    gas_residual=self.residual, gas_divergence_per_s=self.divergence)
-        out.update(self.probe_pressures())
+        out.update(self.probe_pressures(host))
         if self.heat:
-            T = self.G.T.to_numpy()[self.solid == 0]
+            T = host["T"][self.solid == 0]
             out["gas_T_mean_K"] = float(T.mean())
         if self.walls:
-            rate = self.G.wall_rate.to_numpy()
+            rate = host["wall_rate"]
             for k, tube in enumerate(self.tubes):
                 if tube["T"] is not None:
                     out[f"tubes{k}_gas_heat_W"] = float(rate[k])
@@ -248,11 +261,11 @@ class GasPhase:
         """The gas state per cell for snapshots (`gas/*.vti`): voidage, pressure [Pa],
         velocity at the cell centre [m/s] (mean of the two faces), with heat the temperature
         [K], with O2 transport its mole fraction, and `solid` (1 inside a tube)."""
-        G = self.G
-        out = {"voidage": G.eps.to_numpy(), "pressure": G.p.to_numpy()}
+        host = self.host_fields()
+        out = {"voidage": host["eps"], "pressure": host["p"]}
         centre = []
         for c in range(3):
-            u = G.u[c].to_numpy()
+            u = host[f"u{c}"]
             if u.shape[c] == self.gg.cells[c]:  # periodic: the last face is the first
                 u = np.concatenate([u, np.take(u, [0], axis=c)], axis=c)
             lo = np.take(u, range(self.gg.cells[c]), axis=c)
@@ -260,15 +273,15 @@ class GasPhase:
             centre.append(0.5 * (lo + hi))
         out["velocity"] = np.stack(centre, axis=-1)
         if self.heat:
-            out["temperature"] = G.T.to_numpy()
+            out["temperature"] = host["T"]
         if self.species:
-            out["o2_mole_fraction"] = G.Y.to_numpy() * self.gas.oxygen.molar_mass / M_O2
+            out["o2_mole_fraction"] = host["Y"] * self.gas.oxygen.molar_mass / M_O2
         out["solid"] = self.solid.astype(np.int32)
         return out
 
     def mean_o2_mole_fraction(self) -> float:
         """Mean O2 mole fraction over the fluid cells."""
-        y = self.G.Y.to_numpy()[self.solid == 0]
+        y = self.host_fields()["Y"][self.solid == 0]
         return float(y.mean() * self.gas.oxygen.molar_mass / M_O2)
 
     def release(self) -> None:

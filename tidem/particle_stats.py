@@ -21,6 +21,7 @@ import taichi as ti
 
 from tidem.hydrodynamics import BED_TOP_PERCENTILE, bed_top
 from tidem.kernels.diagnostics import make_sample_kernel
+from tidem.kernels.field_copy import FieldCopier
 from tidem.kernels.ordered import in_order
 
 HEIGHT_BINS = 1 << 14
@@ -56,7 +57,9 @@ class ParticleStats:
         self.width = (z_range[1] - z_range[0]) / HEIGHT_BINS
         self._tree = None
         self._kernel = None
-        if not in_order():
+        if in_order():  # the arrays in one launch per element type (`kernels/field_copy.py`)
+            self._host = FieldCopier({"active": S.active, "x": S.x, **({"T": S.T} if heat else {})})
+        else:
             P = self.P = SimpleNamespace(z_hist=ti.field(ti.i32))
             fb = ti.FieldsBuilder()
             fb.dense(ti.i, HEIGHT_BINS).place(P.z_hist)
@@ -80,11 +83,11 @@ class ParticleStats:
         return out
 
     def _from_host(self, bed: bool) -> dict[str, float]:
-        S = self.S
-        active = S.active.to_numpy().astype(bool)
-        out = {"bed_top": bed_top(S.x.to_numpy()[active, 2])} if bed else {}
+        host = self._host.read()
+        active = host["active"].astype(bool)
+        out = {"bed_top": bed_top(host["x"][active, 2])} if bed else {}
         if self.heat:
-            T = S.T.to_numpy()[active]
+            T = host["T"][active]
             if len(T):
                 out.update(T_mean_K=float(T.mean()), T_min_K=float(T.min()), T_max_K=float(T.max()))
         return out

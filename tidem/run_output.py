@@ -17,6 +17,7 @@ from tidem.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_cs
 from tidem.io.mesh_output import MeshOutput
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
+from tidem.kernels.field_copy import FieldCopier
 from tidem.model import Model
 from tidem.output_size import cadence
 from tidem.reaction_output import ReactionLog
@@ -24,6 +25,7 @@ from tidem.reactions import reaction_summary
 from tidem.run_tables import alpha_profile, tube_alpha_columns
 from tidem.solver import Solver
 
+SNAPSHOT_FIELDS = ("active", "ident", "x", "radius", "v", "w", "ncontact", "T")  # T: with heat
 WRITES_AHEAD = 2  # snapshots the writer thread may be behind the run loop (each held in memory meanwhile)
 
 
@@ -60,6 +62,7 @@ class Output:
             else:
                 (self.dir / pvd).unlink(missing_ok=True)
         self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
+        self._particles = None  # the snapshot's particle fields, read in one launch per element type (`snapshot`)
         self._writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tidem-snapshots")
         self._pending: list[tuple[Future, Path, Callable | None]] = []
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
@@ -79,22 +82,24 @@ class Output:
         next steps run (at most WRITES_AHEAD snapshots behind; `flush` waits for them). `on_written`
         is called with the file once it is on disk, in this thread (`poll`, `flush`): the background
         renderer it starts dies with the thread that started it (PR_SET_PDEATHSIG)."""
-        S = solver.state
-        active = S.active.to_numpy().astype(bool)
-        idx = np.flatnonzero(active)
-        ident = S.ident.to_numpy()[idx]  # index in the scene (storage is re-sorted as the bed flows)
+        if self._particles is None:
+            S = solver.state
+            self._particles = FieldCopier({name: getattr(S, name) for name in SNAPSHOT_FIELDS if hasattr(S, name)})
+        host = self._particles.read()
+        idx = np.flatnonzero(host["active"])
+        ident = host["ident"][idx]  # index in the scene (storage is re-sorted as the bed flows)
         name = f"snap_{len(self.entries):05d}.vtp"
-        extra = {"temperature": S.T.to_numpy()[idx]} if self.model.features.heat else {}
+        extra = {"temperature": host["T"][idx]} if self.model.features.heat else {}
         if self.model.features.coarse_grain:
             extra["grains"] = self.model.coarse_grain[ident] ** 3  # grains a parcel stands for (k^3)
         t = solver.t
-        points, point_data = S.x.to_numpy()[idx], {**extra,
-            "radius": S.radius.to_numpy()[idx],
-            "velocity": S.v.to_numpy()[idx],
-            "omega": S.w.to_numpy()[idx],
+        points, point_data = host["x"][idx], {**extra,
+            "radius": host["radius"][idx],
+            "velocity": host["v"][idx],
+            "omega": host["w"][idx],
             "id": ident.astype(np.int32),
             "group": self.model.group[ident].astype(np.int32),
-            "contacts": S.ncontact.to_numpy()[idx].astype(np.int32),
+            "contacts": host["ncontact"][idx].astype(np.int32),
         }
         self.entries.append((t, f"snapshots/{name}"))
         self.meshes.snapshot()

@@ -30,6 +30,7 @@ from tidem.kernels.contact_laws import LINEAR
 from tidem.kernels.reactions import make_reaction_kernel
 from tidem.kernels.contact import make_force_kernel
 from tidem.kernels.diagnostics import make_energy_kernel, make_health_kernel
+from tidem.kernels.field_copy import FieldCopier
 from tidem.particle_stats import ParticleStats
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.mesh_contact import make_mesh_mover
@@ -46,6 +47,11 @@ from tidem.state import State, allocate
 from tidem.state_fill import load_bins
 from tidem.storage_order import SCRATCH, sort_storage, sorts_storage
 from tidem.surfaces import is_heated
+
+
+# The small fields the host reads at health checks and time-series samples, copied all at once (`kernels/field_copy.py`:
+# one launch in the calling thread, against a parallel launch per field for to_numpy())
+TALLIES = ("overflow", "sums", "worst_at", "worst", "surf_rate", "surf_energy", "plane_foil_T", "tube_bin_T", "sink_sum")
 
 
 class RunError(RuntimeError):
@@ -67,6 +73,7 @@ class Solver:
         self._drift_done = False  # within advance(): the next step's kick-drift is done
         self.split_passes = False  # forces and kick as kernels of their own (`tidem bench --profile` tells them apart)
         self.timer = PhaseTimer()  # seconds per phase of the step (run.json's profile)
+        self.field_copier = None  # every field a checkpoint keeps, to and from the host (`tidem.checkpoint`)
         forces = self._build_contacts()
         self.gas = None
         if f.gas:
@@ -75,6 +82,8 @@ class Solver:
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
         self._energies = make_energy_kernel(model.gravity, self.state)
         self._health = make_health_kernel(self.state)
+        self._tallies = FieldCopier({name: getattr(self.state, name) for name in TALLIES
+                                     if hasattr(self.state, name)})
         dom = model.scene.domain
         self.particle_stats = ParticleStats(self.state, (dom.min[2], dom.max[2]), f.heat)
         self._build_sources_and_sinks()
@@ -298,7 +307,7 @@ class Solver:
     def check(self) -> None:
         """Raise RunError on capacity overflow, NaN or an overlap above numerics.max_overlap."""
         S = self.state
-        over = S.overflow.to_numpy()
+        over = self._tallies.read()["overflow"]
         if over[0] > 0:
             raise RunError(
                 f"neighbour list overflow: a particle has {over[0]} neighbours within reach, capacity is "
@@ -331,33 +340,34 @@ class Solver:
         to the top (empty without either)."""
         if not (self.model.features.sink or self.model.features.recycle):
             return {}
-        mass, count = self.state.sink_sum.to_numpy()
+        mass, count = self._tallies.read()["sink_sum"]
         return dict(discharged_mass_kg=float(mass), discharged_particles=int(count))
 
     def health(self) -> tuple[int, int, float]:
         """(first active particle with a non-finite position, or n; first with the largest overlap
         ratio; that ratio), reduced on the device (`kernels/diagnostics.py`)."""
         self._health(self.n)
-        bad, worst_at = (int(v) for v in self.state.worst_at.to_numpy())
-        return bad, worst_at, float(self.state.worst[None])
+        tallies = self._tallies.read()
+        bad, worst_at = (int(v) for v in tallies["worst_at"])
+        return bad, worst_at, float(tallies["worst"])
 
     def energies(self) -> dict:
         """Kinetic, rotational and potential energy [J], contacts per particle, active count."""
         self._energies(self.n)
-        e_kin, e_rot, e_pot, contacts, active = (float(v) for v in self.state.sums.to_numpy())
+        e_kin, e_rot, e_pot, contacts, active = (float(v) for v in self._tallies.read()["sums"])
         return dict(kinetic_energy_J=e_kin, rotational_energy_J=e_rot, potential_energy_J=e_pot,
                     coordination=contacts / max(active, 1.0), particles=int(active))
 
     def heat_summary(self) -> dict:
         """Heat flow [W] and heat [J] per heated surface (the particles' temperatures:
         `particle_stats`)."""
-        S = self.state
         out = {}
-        rate, energy = S.surf_rate.to_numpy(), S.surf_energy.to_numpy()
+        tallies = self._tallies.read()
+        rate, energy = tallies["surf_rate"], tallies["surf_energy"]
         f = self.model.features
         n_planes = len(self.model.planes)
-        foil_T = list(S.plane_foil_T.to_numpy() if f.wall_foil else [None] * n_planes)
-        foil_T += list(S.tube_bin_T.to_numpy().mean(axis=1) if f.foil else [None] * len(self.model.tubes))
+        foil_T = list(tallies["plane_foil_T"] if f.wall_foil else [None] * n_planes)
+        foil_T += list(tallies["tube_bin_T"].mean(axis=1) if f.foil else [None] * len(self.model.tubes))
         meshes = [m.surface() for m in self.model.meshes]
         for s, surf in enumerate(self.model.planes + self.model.tubes + meshes):
             if is_heated(surf):
