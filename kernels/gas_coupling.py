@@ -41,7 +41,7 @@ import math
 import taichi as ti
 
 from .drag import make_drag, make_nusselt
-from .gas_grid import CORNERS, layer_grid, make_cic, serial_loops
+from .gas_grid import layer_grid, make_cic, serial_loops
 from .ordered import in_order
 
 MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas_limits`)
@@ -85,12 +85,12 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     tubes in the gas) the voidage is taken over each cell's open volume G.open. With `layers` > 1
     (G.solid_layer allocated) a grain's voidage comes from horizontal layers `layers` times thinner
     than a gas cell (`layered_voidage`)."""
-    cic, corner, weight = make_cic(gg)
+    cic, corner, weight, corners = make_cic(gg)
     layered = layers > 1
-    lcic = lcorner = lself = cself = inv_lvol = None  # used only when layered
+    lcic = lcorner = lweight = lcorners = lself = cself = inv_lvol = None  # used only when layered
     if layered:
         lg = layer_grid(gg, layers)
-        lcic, lcorner, _ = make_cic(lg)
+        lcic, lcorner, lweight, lcorners = make_cic(lg)
         inv_lvol = 1.0 / lg.volume
         lself, cself = make_self_share(lcorner), make_self_share(corner)
     drag_coefficient = make_drag(drag_model, rho, mu)
@@ -111,9 +111,9 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         out = ti.Vector([0.0, 0.0, 0.0])
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
-            for q in ti.static(range(8)):
-                o = ti.Vector(CORNERS[q])
-                out[c] += weight(frac, o) * F[c][corner(base, o, c)]
+            for o_t in ti.static(corners(c)):
+                o = ti.Vector(o_t)
+                out[c] += weight(frac, o, c) * F[c][corner(base, o, c)]
         return out
 
     @ti.func
@@ -130,19 +130,19 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         out = ti.Vector([0.0, 0.0, 0.0])
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
-            for q in ti.static(range(8)):
-                o = ti.Vector(CORNERS[q])
+            for o_t in ti.static(corners(c)):
+                o = ti.Vector(o_t)
                 J = corner(base, o, c)
-                out[c] += weight(frac, o) * face_voidage(J, c) * U[c][J]
+                out[c] += weight(frac, o, c) * face_voidage(J, c) * U[c][J]
         return out
 
     @ti.func
     def sample_cells(F: ti.template(), x):
         base, frac = cic(x, -1)
         out = 0.0
-        for q in ti.static(range(8)):
-            o = ti.Vector(CORNERS[q])
-            out += weight(frac, o) * F[corner(base, o, -1)]
+        for o_t in ti.static(corners(-1)):
+            o = ti.Vector(o_t)
+            out += weight(frac, o, -1) * F[corner(base, o, -1)]
         return out
 
     @ti.func
@@ -155,13 +155,13 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         """T_g at x, with the mirror value 2 T_in - T_c below the bottom cell over the inlet."""
         base, frac = cic(x, -1)
         out = 0.0
-        for q in ti.static(range(8)):
-            o = ti.Vector(CORNERS[q])
+        for o_t in ti.static(corners(-1)):
+            o = ti.Vector(o_t)
             J = corner(base, o, -1)
             t = G.T[J]
             if below_inlet(base, o, J):
                 t = 2.0 * t_in - G.T[J]
-            out += weight(frac, o) * t
+            out += weight(frac, o, -1) * t
         return out
 
     @ti.func
@@ -179,13 +179,13 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         base, frac = lcic(x, -1)
         eps_l = 0.0
         open_l = 0.0
-        for q in ti.static(range(8)):
-            o = ti.Vector(CORNERS[q])
+        for o_t in ti.static(lcorners(-1)):
+            o = ti.Vector(o_t)
             J = lcorner(base, o, -1)
             open_vol = 1.0
             if ti.static(cut_cells):
                 open_vol = G.open[J[0], J[1], J[2] // layers]
-            w = weight(frac, o)
+            w = lweight(frac, o, -1)
             eps_l += w * (1.0 - G.solid_layer[J] * inv_lvol / open_vol)
             open_l += w * open_vol
         own_l = vp * inv_lvol / open_l * lself(base, frac)
@@ -212,14 +212,14 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             if S.active[i]:
                 base, frac = cic(S.x[i], -1)
                 vp = volume(i)
-                for q in ti.static(range(8)):
-                    o = ti.Vector(CORNERS[q])
-                    G.solid_vol[corner(base, o, -1)] += weight(frac, o) * vp
+                for o_t in ti.static(corners(-1)):
+                    o = ti.Vector(o_t)
+                    G.solid_vol[corner(base, o, -1)] += weight(frac, o, -1) * vp
                 if ti.static(layered):
                     base, frac = lcic(S.x[i], -1)
-                    for q in ti.static(range(8)):
-                        o = ti.Vector(CORNERS[q])
-                        G.solid_layer[lcorner(base, o, -1)] += weight(frac, o) * vp
+                    for o_t in ti.static(lcorners(-1)):
+                        o = ti.Vector(o_t)
+                        G.solid_layer[lcorner(base, o, -1)] += lweight(frac, o, -1) * vp
         if ti.static(serial):
             ti.loop_config(serialize=True)
         for I in ti.grouped(ti.ndrange(*cells)):
@@ -236,9 +236,9 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         k = S.gK[i]
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
-            for q in ti.static(range(8)):
-                o = ti.Vector(CORNERS[q])
-                wk = weight(frac, o) * k
+            for o_t in ti.static(corners(c)):
+                o = ti.Vector(o_t)
+                wk = weight(frac, o, c) * k
                 J = corner(base, o, c)
                 if ti.static(layered):
                     B[c][J] += wk * face_voidage(J, c) / S.geps[i]
@@ -248,10 +248,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         if ti.static(heat):
             hp = S.gH[i]
             base, frac = cic(x, -1)
-            for q in ti.static(range(8)):
-                o = ti.Vector(CORNERS[q])
+            for o_t in ti.static(corners(-1)):
+                o = ti.Vector(o_t)
                 J = corner(base, o, -1)
-                wh = weight(frac, o) * hp
+                wh = weight(frac, o, -1) * hp
                 if below_inlet(base, o, J):
                     G.H[J] -= wh
                     G.HT[J] += wh * (S.T[i] - 2.0 * t_in)

@@ -30,7 +30,7 @@ import taichi as ti
 
 from .gas_band import make_band_solve
 from .gas_energy import make_energy_kernels
-from .gas_grid import CLOSED, CORNERS, INLET, OUTLET, make_cic, serial_loops
+from .gas_grid import CLOSED, INLET, OUTLET, make_cic, serial_loops
 from .ordered import in_order
 
 SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster, deterministic)
@@ -66,7 +66,7 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
     `conduction` Fourier conduction through the gas; `band` > 0 (`gas_band.band_width`) adds the direct
     pressure solve band_solve (fields band, band_y)."""
-    cic, corner, weight = make_cic(gg)
+    cic, corner, weight, corners = make_cic(gg)
     n = gg.cells
     small = serial_solve(n[0] * n[1] * n[2])
     serial = serial_loops(gg)
@@ -117,9 +117,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     def sample(F: ti.template(), c: ti.template(), x):
         base, frac = cic(x, c)
         out = 0.0
-        for q in ti.static(range(8)):
-            o = ti.Vector(CORNERS[q])
-            out += weight(frac, o) * F[corner(base, o, c)]
+        for o_t in ti.static(corners(c)):
+            o = ti.Vector(o_t)
+            out += weight(frac, o, c) * F[corner(base, o, c)]
         return out
 
     @ti.kernel

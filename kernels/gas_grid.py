@@ -22,7 +22,7 @@ from .ordered import in_order
 
 CLOSED, INTERIOR, INLET, OUTLET = 0, 1, 2, 3  # kinds of a face: wall, between cells, inlet, outlet
 # The 8 corners of a CIC cube (0/1 per axis, the last axis fastest). Loops over them as
-# `for q in ti.static(range(8)): o = ti.Vector(CORNERS[q])` keep o a compile-time constant, so the weights
+# Corners as Python tuples (`make_cic`'s corners) keep o a compile-time constant, so the weights
 # fold; `ti.static(ti.grouped(ti.ndrange(2, 2, 2)))` left them run-time values: the deposit of
 # `gas_coupling.couple` took 2.25 against 1.53 ms a gas step of fluidized_tube (measured).
 CORNERS = [(q // 4, q // 2 % 2, q % 2) for q in range(8)]
@@ -69,9 +69,15 @@ def layer_grid(gg: GasGrid, layers: int) -> GasGrid:
 
 
 def make_cic(gg: GasGrid):
-    """Return cic(x, stagger) -> (base index vector, fraction vector) and corner(base, o, shape).
+    """Return cic(x, stagger) -> (base index vector, fraction vector), corner(base, o, stagger) -> lattice
+    index, weight(frac, o, stagger) and corners(stagger), the CIC cube's corners o (0/1 per axis) as
+    compile-time tuples: `for o in ti.static(corners(stagger))` visits each lattice point a particle reaches.
 
-    stagger = -1 for cell centres, c (0..2) for faces normal to axis c.
+    stagger = -1 for cell centres, c (0..2) for faces normal to axis c. An axis across (x or y) with a
+    single lattice point (one cell, periodic or between walls; faces along it: one, periodic) puts both
+    corners on that point: it is visited once with weight 1 instead of twice with 1 - f and f, the same
+    value in exact arithmetic at half the loads and adds (a one-cell slice such as fluidized_tube's 20 x 1
+    x 50 grid). Never z, whose corner below the bottom cell may take a mirrored value (`below_inlet`).
     """
     lo = ti.Vector(list(gg.lo))
     inv_h = ti.Vector([1.0 / v for v in gg.h])
@@ -100,11 +106,19 @@ def make_cic(gg: GasGrid):
                 idx[a] = ti.min(ti.max(idx[a], 0), top)
         return idx
 
+    def single(a: int, stagger: int) -> bool:
+        """Axis a has a single lattice point for this stagger (docstring)."""
+        return a < 2 and n[a] == 1 and (per[a] or stagger != a)
+
+    def corners(stagger: int) -> list[tuple[int, int, int]]:
+        return [o for o in CORNERS if not any(o[a] and single(a, stagger) for a in range(3))]
+
     @ti.func
-    def weight(frac, o):
+    def weight(frac, o, stagger: ti.template()):
         w = 1.0
         for a in ti.static(range(3)):
-            w *= frac[a] if o[a] == 1 else 1.0 - frac[a]
+            if ti.static(not single(a, stagger)):
+                w *= frac[a] if o[a] == 1 else 1.0 - frac[a]
         return w
 
-    return cic, corner, weight
+    return cic, corner, weight, corners

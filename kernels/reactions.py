@@ -48,7 +48,7 @@ import math
 
 import taichi as ti
 
-from .gas_grid import CORNERS, make_cic
+from .gas_grid import make_cic
 from .ordered import in_order
 
 CHAR, POLY, SUBL = 0, 1, 2
@@ -63,15 +63,15 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
     timing = any(r["kind"] == SUBL for r in reactions)
     burning = any(r["kind"] == CHAR for r in reactions)
     if gas:
-        cic, corner, weight = make_cic(gg)
+        cic, corner, weight, corners = make_cic(gg)
 
     @ti.func
     def deposit(F: ti.template(), x, amount):
         if ti.static(gas):
             base, frac = cic(x, -1)
-            for q in ti.static(range(8)):
-                o = ti.Vector(CORNERS[q])
-                ti.atomic_add(F[corner(base, o, -1)], weight(frac, o) * amount)
+            for o_t in ti.static(corners(-1)):
+                o = ti.Vector(o_t)
+                ti.atomic_add(F[corner(base, o, -1)], weight(frac, o, -1) * amount)
 
     @ti.func
     def set_mass(i, m_new, shrink: ti.template()):
