@@ -2,11 +2,14 @@
 
 `Field.to_numpy()` and `from_numpy()` compile (or load from the offline cache and JIT) a kernel
 for every field, about 45 ms each on 2 cores: a checkpoint of fluidized_tube's 95 fields took
-4.7 s the first time, most of a short run's output time. Here the fields of one element type
-(f64, i32, ...) are copied into one flat host array by a single kernel, each field's values at
-an offset in numpy's C order of `to_numpy()` (index, then vector component or matrix row and
-column), so that `read()` gives each field the array `to_numpy()` would, bit for bit. Fields of
-the same shape share one loop (a loop is most of a kernel's compile time): about 1 s for the 95.
+1.6-4.7 s the first time in a process (as Taichi's cache held them), most of a short run's output
+time, and each call is a parallel launch (about 0.14 ms for a field of five values). Here the fields
+of one element type (f64, i32, ...) are copied into one flat host array by a single kernel, each
+field's values at an offset in numpy's C order of `to_numpy()` (index, then vector component or
+matrix row and column), so that `read()` gives each field the array `to_numpy()` would, bit for bit.
+Fields of the same shape share one loop (a loop is most of a kernel's compile time): 0.6-1.2 s for
+the 95; a loop of at most SERIAL_VALUES values runs in the calling thread, without the thread pool's
+round trip (`benchmarks/README.md`).
 """
 
 import math

@@ -9,7 +9,8 @@ from tidem.kernels.field_copy import FieldCopier
 
 def _fields() -> dict:
     """Every layout a checkpoint holds: 0-d, 1-d, 2-d and 3-d index shapes; scalars, vectors and an
-    n x m matrix; f64 and i32; two fields of one shape (one shared loop)."""
+    n x m matrix; f64 and i32; two fields of one shape (one shared loop); loops in one thread and
+    parallel ones."""
     return {
         "scalar0d": ti.field(ti.f64, shape=()),
         "vector0d": ti.Vector.field(3, ti.f64, shape=()),
@@ -22,6 +23,8 @@ def _fields() -> dict:
         "faces": ti.field(ti.i32, shape=(5, 1, 6)),
         "matrix": ti.Matrix.field(2, 3, ti.f64, shape=(2, 4)),
         "column": ti.Matrix.field(19, 1, ti.f64, shape=(2,)),
+        "big": ti.Vector.field(3, ti.f64, shape=1500),  # over SERIAL_VALUES: a parallel loop
+        "big_rows": ti.field(ti.i32, shape=(1500, 4)),
     }
 
 
