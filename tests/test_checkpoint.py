@@ -150,6 +150,22 @@ def test_kill_during_checkpoint_write_keeps_the_previous_one(tmp_path, monkeypat
     assert meta["solver"]["steps"] == 0
 
 
+def test_restore_refuses_a_missing_or_misshapen_array_before_writing_any_field(tmp_path):
+    s = Solver(build_model(validate(hot_pour())))
+    try:
+        checkpoint.save(tmp_path, s, {}, {})
+        meta, arrays = checkpoint.load(tmp_path)
+        with pytest.raises(checkpoint.CheckpointError, match="lacks state/T"):
+            checkpoint.restore(s, meta, {k: v for k, v in arrays.items() if k != "state/T"})
+        T0 = s.state.T.to_numpy()
+        bad = {**arrays, "state/T": np.zeros_like(arrays["state/T"]), "state/x": arrays["state/x"][:-1]}
+        with pytest.raises(checkpoint.CheckpointError, match=r"state/x: checkpoint shape \(\d+, 3\) does not match"):
+            checkpoint.restore(s, meta, bad)
+        assert np.array_equal(s.state.T.to_numpy(), T0)  # every shape is checked before any field is written
+    finally:
+        s.release()
+
+
 def test_resume_refuses_an_edited_scene_naming_the_key():
     raw = hot_pour()
     edited = hot_pour(0.2)  # a later end time and new output cadence may change
