@@ -1,8 +1,8 @@
 """The particles' part of a time-series sample: the bed top (`hydrodynamics.bed_top`) and the
 temperature range of the active particles.
 
-On the CPU they are taken from the particle arrays (host memory there), as always, so float64
-runs keep their time series to the last bit. On a GPU copying every position, temperature and
+On the CPU they are taken from the particle arrays, copied to the host in one launch per element
+type (`kernels/field_copy.py`), so float64 runs keep their time series to the last bit. On a GPU copying every position, temperature and
 active flag to the host at each sample held the 700 000-grain bed's run loop (output 0.6 ms a
 step, `benchmarks/README.md`); there a kernel (`kernels/diagnostics.make_sample_kernel`) bins
 the centres' heights into HEIGHT_BINS bins over the domain and reduces the temperatures, and
@@ -52,7 +52,7 @@ class ParticleStats:
     "T_max_K" (with active particles)} over the active particles of state S (module docstring)."""
 
     def __init__(self, S, z_range: tuple[float, float], heat: bool):
-        self.S, self.heat = S, heat
+        self.heat = heat
         self.lo = z_range[0]
         self.width = (z_range[1] - z_range[0]) / HEIGHT_BINS
         self._tree = None
