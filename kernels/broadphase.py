@@ -244,16 +244,22 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     @ti.func
     def match_rows(n):
         """src[i, k]: the new entry's slot in i's old row, -2 - its entry in the flip buffer when the
-        partner's old row held the pair, -1 for a new pair (step 3); reads the old rows only."""
+        partner's old row held the pair, -1 for a new pair (step 3) and for a partner apart, whose history
+        is zero (step 5): only the partners that touch are looked up. Reads the old rows only."""
         S.flips[None] = 0
         for i in range(n):
             n_old = S.nbr_n[i]
-            for k in range(S.nbr_count[i]):
+            count = S.nbr_count[i]
+            touching = ti.min(S.nbr_touch[i], count)  # (an inactive particle's nbr_touch is stale, its count 0)
+            for k in range(touching, count):
+                S.src[i, k] = -1
+            for k in range(touching):
                 j = S.nbr_new[i, k]
                 found = -1
                 for a in range(n_old):
                     if S.nbr[i, a] == j:
                         found = a
+                        break
                 if found < 0:
                     for m in range(S.nbr_n[j]):
                         if S.nbr[j, m] == i:  # the pair changed owner: its history, seen from i
@@ -340,8 +346,6 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                         else:
                             take_history(i, k, src)
                             k = src
-            for k in range(S.nbr_touch[i], count):  # partners apart: no history (step 5)
-                set_history(i, k, zero3, zero3, 0.0)
             for k in range(count):
                 S.nbr[i, k] = S.nbr_new[i, k]
             S.nbr_n[i] = count

@@ -10,30 +10,58 @@ import taichi as ti
 from .ordered import raise_max
 
 CHUNK = 64  # particles summed in registers before one atomic add per sum (atomics on one cache line contend)
+FINITE = 1e300  # |x| above this, or NaN (every comparison false), is not a position
+
+
+@ti.func
+def finite(x):
+    """Whether position x is one (every coordinate within FINITE)."""
+    return ti.abs(x[0]) <= FINITE and ti.abs(x[1]) <= FINITE and ti.abs(x[2]) <= FINITE
 
 
 def make_energy_kernel(gravity, S):
-    """Return `energies(n)` that fills S.sums with [E_kin, E_rot, E_pot, contacts, active]."""
+    """Return (energies(n), sample(n)). `energies` fills S.sums with [E_kin, E_rot, E_pot, contacts,
+    active]; `sample`, a time-series row's reductions in the same pass over the particles, also sets
+    S.worst to the largest overlap ratio and S.worst_at[0] to the first active particle with a
+    non-finite position (n if none), as the health check's first loop does (`make_health_kernel`):
+    one loop and one read of the tallies a sample instead of three loops and two reads (`tidem.solver`).
+    S.worst_at[1] (the particle of the largest overlap) is left as it was."""
     g = ti.Vector(list(gravity))
 
-    @ti.kernel
-    def energies(n: ti.i32):
+    @ti.func
+    def reduce(n, health: ti.template()):
         for q in ti.static(range(5)):
             S.sums[q] = 0.0
+        if ti.static(health):
+            S.worst_at[0] = n
+            S.worst[None] = 0.0
         for c in range((n + CHUNK - 1) // CHUNK):
             part = ti.Vector([0.0, 0.0, 0.0, 0.0, 0.0])
+            worst = 0.0
             for i in range(c * CHUNK, ti.min(n, (c + 1) * CHUNK)):
                 if S.active[i]:
                     m = S.mass[i]
                     part += ti.Vector([0.5 * m * S.v[i].norm_sqr(), 0.2 * m * S.radius[i] ** 2 * S.w[i].norm_sqr(),
                                        -m * g.dot(S.x[i]), S.ncontact[i], 1.0])
+                    if ti.static(health):
+                        if not finite(S.x[i]):
+                            ti.atomic_min(S.worst_at[0], i)
+                        if S.ovl[i] > worst:  # (as raise_max: a NaN never raises it)
+                            worst = S.ovl[i]
             for q in ti.static(range(5)):
                 ti.atomic_add(S.sums[q], part[q])
+            if ti.static(health):
+                raise_max(S.worst, worst)
 
-    return energies
+    @ti.kernel
+    def energies(n: ti.i32):
+        reduce(n, False)
 
+    @ti.kernel
+    def sample(n: ti.i32):
+        reduce(n, True)
 
-FINITE = 1e300  # |x| above this, or NaN (every comparison false), is not a position
+    return energies, sample
 
 
 def make_health_kernel(S):
@@ -50,8 +78,7 @@ def make_health_kernel(S):
         S.worst[None] = 0.0
         for i in range(n):
             if S.active[i]:
-                x = S.x[i]
-                if not (ti.abs(x[0]) <= FINITE and ti.abs(x[1]) <= FINITE and ti.abs(x[2]) <= FINITE):
+                if not finite(S.x[i]):
                     ti.atomic_min(S.worst_at[0], i)
                 raise_max(S.worst, S.ovl[i])
         for i in range(n):

@@ -270,13 +270,16 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 B[c][I] = 0.0
                 BV[c][I] = 0.0
         if ti.static(heat):
-            G.heat_rate[0] = 0.0
             if ti.static(serial):
                 ti.loop_config(serialize=True)
             for I in ti.grouped(ti.ndrange(*cells)):
                 G.H[I] = 0.0
                 G.HT[I] = 0.0
+        # both largest rates in locals, which Taichi keeps per thread and merges at the loop's end: an
+        # atomic max on G.heat_rate from every particle (both threads on one address) took 0.26 ms of
+        # the 0.53 ms loop on fluidized_tube (`benchmarks/README.md`)
         rate = 0.0
+        heat_rate_max = 0.0
         for i in range(n):
             if S.active[i]:
                 x = S.x[i]
@@ -312,7 +315,9 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                     if ti.static(tracer_dt > 0.0):
                         if S.rx[i] >= 0:  # reacting: shrinks to nothing; kernels/reactions.py bounds its T
                             heat_rate = 0.0
-                    ti.atomic_max(G.heat_rate[0], heat_rate)
+                    ti.atomic_max(heat_rate_max, heat_rate)
+        if ti.static(heat):
+            G.heat_rate[0] = heat_rate_max
         if ti.static(ordered):
             ti.loop_config(serialize=True)  # deposits summed in particle order (determinism)
         for i in range(n):

@@ -194,6 +194,7 @@ def test_the_health_check_names_the_first_bad_particle_and_the_worst_overlap(sol
     S.active.from_numpy(active)
     with pytest.raises(RunError, match=f"particle {ident[2]} has a non-finite position"):
         s.check()
+    assert s.sample_tallies()["worst_at"][0] == s.health()[0] < s.n  # a time-series sample's pass finds it too
     x[[1, 2]] = 0.01
     S.x.from_numpy(x)
     ovl = np.zeros_like(S.ovl.to_numpy())
@@ -204,3 +205,6 @@ def test_the_health_check_names_the_first_bad_particle_and_the_worst_overlap(sol
     with pytest.raises(RunError, match=f"particle {ident[3]} overlaps a neighbour or wall by 20.0 %"):
         s.check()
     assert s.health() == (s.n, 3, pytest.approx(0.2))
+    tallies = s.sample_tallies()  # a time-series sample's reductions: the same largest overlap and energies
+    assert s.largest_overlap(tallies) == s.health()[2] and tallies["worst_at"][0] == s.n
+    assert s.energies(tallies) == s.energies()

@@ -159,17 +159,18 @@ class Output:
 
     def sample(self, solver: Solver) -> None:
         row = {"time_s": solver.t, "step": solver.steps}
-        row.update(solver.energies())
-        row["max_overlap_ratio"] = solver.health()[2]
+        tallies = solver.sample_tallies()
+        row.update(solver.energies(tallies))
+        row["max_overlap_ratio"] = solver.largest_overlap(tallies)
         stats = {}
         if self.bed_height or self.model.features.heat:
             stats = solver.particle_stats.sample(solver.n, self.bed_height)
         if self.bed_height:
             row["bed_height_m"] = stats.pop("bed_top")
-        row.update(solver.outlet_summary())
+        row.update(solver.outlet_summary(tallies))
         if self.model.features.heat:
             row.update(stats)
-            row.update(solver.heat_summary())
+            row.update(solver.heat_summary(tallies))
         if solver.gas is not None:
             row.update(solver.gas.summary())
         row.update(tube_alpha_columns(self.model, row))

@@ -80,7 +80,7 @@ class Solver:
             self.gas = GasPhase(model, self.state, ti.f32 if f.precision == "float32" else ti.f64, self.timer)
         self._build_integrators(forces)
         self.profile_t0 = None  # time at which the tube heat-flux profile started accumulating
-        self._energies = make_energy_kernel(model.gravity, self.state)
+        self._energies, self._sample_sums = make_energy_kernel(model.gravity, self.state)
         self._health = make_health_kernel(self.state)
         self._tallies = FieldCopier({name: getattr(self.state, name) for name in TALLIES
                                      if hasattr(self.state, name)})
@@ -307,7 +307,9 @@ class Solver:
     def check(self) -> None:
         """Raise RunError on capacity overflow, NaN or an overlap above numerics.max_overlap."""
         S = self.state
-        over = self._tallies.read()["overflow"]
+        self._health(self.n)
+        tallies = self._tallies.read()  # one read for both
+        over = tallies["overflow"]
         if over[0] > 0:
             raise RunError(
                 f"neighbour list overflow: a particle has {over[0]} neighbours within reach, capacity is "
@@ -324,7 +326,7 @@ class Solver:
             raise RunError(
                 f"neighbour list: {over[2]} contacts that changed owner at a rebuild lost their history (more than "
                 f"{self.n} at once); lower numerics.skin")
-        i, worst_at, worst = self.health()
+        i, worst_at, worst = self.health(tallies)
         if i < self.n:
             raise RunError(f"particle {S.ident[i]} has a non-finite position at t = {self.t:.6g} s (step {self.steps}); "
                            "the time step is too large for the contact stiffness: lower numerics.dt_fraction")
@@ -335,34 +337,51 @@ class Solver:
                 f"(limit {100 * limit:.0f} %): the contacts are too soft or too fast for this step; raise "
                 "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
 
-    def outlet_summary(self) -> dict:
+    def sample_tallies(self) -> dict[str, np.ndarray]:
+        """Every tally after a time-series sample's reductions (`kernels/diagnostics.make_energy_kernel`:
+        energies, largest overlap, first non-finite position; one launch, one read) for `energies`,
+        `largest_overlap`, `outlet_summary` and `heat_summary` (about 0.5 ms a sample less than each
+        reading its own, `benchmarks/README.md`)."""
+        self._sample_sums(self.n)
+        return self._tallies.read()
+
+    def outlet_summary(self, tallies: dict | None = None) -> dict:
         """Mass [kg] and number of the particles a sink outlet has taken or a recycle outlet has moved
-        to the top (empty without either)."""
+        to the top (empty without either); `tallies`: a read of them (else read here)."""
         if not (self.model.features.sink or self.model.features.recycle):
             return {}
-        mass, count = self._tallies.read()["sink_sum"]
+        mass, count = (tallies or self._tallies.read())["sink_sum"]
         return dict(discharged_mass_kg=float(mass), discharged_particles=int(count))
 
-    def health(self) -> tuple[int, int, float]:
+    def health(self, tallies: dict | None = None) -> tuple[int, int, float]:
         """(first active particle with a non-finite position, or n; first with the largest overlap
-        ratio; that ratio), reduced on the device (`kernels/diagnostics.py`)."""
-        self._health(self.n)
-        tallies = self._tallies.read()
+        ratio; that ratio), reduced on the device (`kernels/diagnostics.py`); `tallies`: a read of
+        them just after the health kernel (else it runs here)."""
+        if tallies is None:
+            self._health(self.n)
+            tallies = self._tallies.read()
         bad, worst_at = (int(v) for v in tallies["worst_at"])
         return bad, worst_at, float(tallies["worst"])
 
-    def energies(self) -> dict:
-        """Kinetic, rotational and potential energy [J], contacts per particle, active count."""
-        self._energies(self.n)
-        e_kin, e_rot, e_pot, contacts, active = (float(v) for v in self._tallies.read()["sums"])
+    def largest_overlap(self, tallies: dict) -> float:
+        """The largest overlap ratio of `sample_tallies`."""
+        return float(tallies["worst"])
+
+    def energies(self, tallies: dict | None = None) -> dict:
+        """Kinetic, rotational and potential energy [J], contacts per particle, active count;
+        `tallies`: those of `sample_tallies` (else the energies are summed here)."""
+        if tallies is None:
+            self._energies(self.n)
+            tallies = self._tallies.read()
+        e_kin, e_rot, e_pot, contacts, active = (float(v) for v in tallies["sums"])
         return dict(kinetic_energy_J=e_kin, rotational_energy_J=e_rot, potential_energy_J=e_pot,
                     coordination=contacts / max(active, 1.0), particles=int(active))
 
-    def heat_summary(self) -> dict:
+    def heat_summary(self, tallies: dict | None = None) -> dict:
         """Heat flow [W] and heat [J] per heated surface (the particles' temperatures:
-        `particle_stats`)."""
+        `particle_stats`); `tallies`: a read of them (else read here)."""
         out = {}
-        tallies = self._tallies.read()
+        tallies = tallies or self._tallies.read()
         rate, energy = tallies["surf_rate"], tallies["surf_energy"]
         f = self.model.features
         n_planes = len(self.model.planes)
