@@ -4,7 +4,8 @@ Algorithm (O(N) per rebuild):
 1. count particles per cell (atomic add), exclusive prefix sum, scatter particle indices into
    cell order (counting sort); note each particle's slab (`kernels/geometry.py`, `slab_layout`)
    and list the particles of each slab in index order (`slab_list` from `slab_start[s]`: a serial
-   pass, so that the contact pass sweeps each slab in the same order on any thread count);
+   pass, so that the contact pass sweeps each slab in the same order on any thread count). On the
+   CPU, for beds of up to SERIAL_PARTICLES, the whole of step 1 runs in the calling thread;
 2. for every particle i, scan the 27 cells around it but the layer behind along the slab axis,
    whose particles own their pairs with i (slabs are one cell layer thick: 18 cells, as six runs of
    three cells along z, adjacent in the sorted index, or nine runs of two for a z slab axis; which
@@ -18,15 +19,18 @@ Algorithm (O(N) per rebuild):
 3. sort the row in the scratch rows `nbr_new`: the partners that touch i first, then the others,
    each group by partner index (so the result does not depend on thread timing). The contact
    pass's branch on contact then turns once in a row instead of at random: 9-12 % of the pass on
-   the peer bed (`benchmarks/README.md`). Find each partner in the old row (`src[i, k]`: the old
-   slot, -1 for a new pair); a pair listed before in the partner's row (its owner changed: one of
+   the peer bed (`benchmarks/README.md`). Find each partner that touches i in the old row (`src[i,
+   k]`: the old slot, -1 for a new pair and for a partner apart, whose history is zero); a pair listed before in the partner's row (its owner changed: one of
    the two crossed into another slab) takes its history from there, seen from the new owner's
    side (springs change sign), through a buffer (`flip_*`, `src` = -2 - entry);
 4. carry the history within the row, in place (`move_rows`);
 5. note how many partners touch i (`nbr_touch`, listed first) and the smallest gap to the others
    (`nbr_gap` [m], float32), whose history is zeroed: the contact passes skip those quiet partners
    while no particle has moved far enough to close that gap (`kernels/contact.py`).
-Steps 3 and 4 are separate loops, so that no row changes while another particle reads it.
+Steps 2 and 3 read the old rows only and run in one loop, row by row; step 4 is a loop of its own,
+so that no row changes while another particle reads it. On this 2-core VM a bubbling bed's build
+(fluidized_tube, 13 000 grains) went from ten parallel loops to three: each costs a wake-up of the
+thread pool, tens of microseconds on average (`benchmarks/README.md`).
 
 A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
 error that names the setting to raise (never a silent drop).
@@ -40,6 +44,11 @@ from .sizes import make_sizes
 
 
 SCAN_BLOCK = 1024  # cells a thread sums in the prefix sum of a large grid
+# Beds of at most this many particles (capacity) count, sum and scatter them into cells in the calling
+# thread on the CPU: each parallel loop costs a wake-up of the thread pool (tens of microseconds on
+# average on a 2-core VM), more than these loops' work for such a bed (13 000 grains: 0.08 ms in one
+# thread against 0.44 ms in seven parallel loops, `benchmarks/README.md`; the work grows with the bed).
+SERIAL_PARTICLES = 32768
 
 
 def scan_blocks(n_cells: int) -> int:
@@ -63,6 +72,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     """
     if slab_lists is None:
         slab_lists = in_order()
+    serial = in_order() and S.x.shape[0] <= SERIAL_PARTICLES  # the counting sort's loops in the calling thread
     min_image, _wrap, cell_coord, cell_id = make_geometry(grid)
     radius_of, _mass_of = make_sizes(S, uniform)
     n_slabs, slab_of, succ, pred = make_slabs(grid)
@@ -87,10 +97,15 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
 
     @ti.func
     def count_cells(n):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
         for c in range(n_cells):
             S.cell_count[c] = 0
+        ti.loop_config(serialize=True)  # a few slabs
         for s in range(n_slabs + 1):
             S.slab_start[s] = 0
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
         for i in range(n):
             if S.active[i]:
                 c = cell_id(cell_coord(S.x[i]))
@@ -106,7 +121,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         is small, else in blocks of SCAN_BLOCK cells (the blocks' totals in parallel, their offsets in
         one pass, the cells in parallel again): a 1.8 M-cell grid in one GPU thread is a
         million-step loop at every build. Integer sums: the same numbers either way."""
-        if ti.static(n_cells <= SCAN_BLOCK):
+        if ti.static(n_cells <= SCAN_BLOCK or serial):
             run = 0
             ti.loop_config(serialize=True)
             for c in range(n_cells):
@@ -142,6 +157,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
 
     @ti.func
     def scatter(n):
+        if ti.static(serial):
+            ti.loop_config(serialize=True)
         for i in range(n):
             if S.active[i]:
                 slot = ti.atomic_add(S.cell_fill[S.pcell[i]], 1)
@@ -240,40 +257,40 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             S.x_build[i] = xi
             if ti.static(growth):
                 S.r_build[i] = S.radius[i]
+            match_row(i)
 
     @ti.func
-    def match_rows(n):
+    def match_row(i):
         """src[i, k]: the new entry's slot in i's old row, -2 - its entry in the flip buffer when the
         partner's old row held the pair, -1 for a new pair (step 3) and for a partner apart, whose history
-        is zero (step 5): only the partners that touch are looked up. Reads the old rows only."""
-        S.flips[None] = 0
-        for i in range(n):
-            n_old = S.nbr_n[i]
-            count = S.nbr_count[i]
-            touching = ti.min(S.nbr_touch[i], count)  # (an inactive particle's nbr_touch is stale, its count 0)
-            for k in range(touching, count):
-                S.src[i, k] = -1
-            for k in range(touching):
-                j = S.nbr_new[i, k]
-                found = -1
-                for a in range(n_old):
-                    if S.nbr[i, a] == j:
-                        found = a
-                        break
-                if found < 0:
-                    for m in range(S.nbr_n[j]):
-                        if S.nbr[j, m] == i:  # the pair changed owner: its history, seen from i
-                            b = ti.atomic_add(S.flips[None], 1)
-                            if b < S.flip_ft.shape[0]:
-                                S.flip_ft[b] = -S.ft[j, m]
-                                if ti.static(rolling):
-                                    S.flip_mr[b] = -S.mr[j, m]
-                                if ti.static(hysteretic):
-                                    S.flip_dmax[b] = S.dmax[j, m]
-                                found = -2 - b
-                            else:
-                                ti.atomic_add(S.overflow[2], 1)
-                S.src[i, k] = found
+        is zero (step 5): only the partners that touch are looked up. Reads the old rows only, so it runs
+        in the loop that builds the new rows, row by row."""
+        n_old = S.nbr_n[i]
+        count = S.nbr_count[i]
+        touching = ti.min(S.nbr_touch[i], count)  # (an inactive particle's nbr_touch is stale, its count 0)
+        for k in range(touching, count):
+            S.src[i, k] = -1
+        for k in range(touching):
+            j = S.nbr_new[i, k]
+            found = -1
+            for a in range(n_old):
+                if S.nbr[i, a] == j:
+                    found = a
+                    break
+            if found < 0:
+                for m in range(S.nbr_n[j]):
+                    if S.nbr[j, m] == i:  # the pair changed owner: its history, seen from i
+                        b = ti.atomic_add(S.flips[None], 1)
+                        if b < S.flip_ft.shape[0]:
+                            S.flip_ft[b] = -S.ft[j, m]
+                            if ti.static(rolling):
+                                S.flip_mr[b] = -S.mr[j, m]
+                            if ti.static(hysteretic):
+                                S.flip_dmax[b] = S.dmax[j, m]
+                            found = -2 - b
+                        else:
+                            ti.atomic_add(S.overflow[2], 1)
+            S.src[i, k] = found
 
     @ti.func
     def history(i, k):
@@ -357,8 +374,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         scatter(n)
         if ti.static(slab_lists):
             list_slabs(n)
+        S.flips[None] = 0
         build_rows(n)
-        match_rows(n)
         move_rows(n)
         for then in ti.static(after):
             then(n)
