@@ -379,6 +379,9 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         move_rows(n)
         for then in ti.static(after):
             then(n)
+        # every particle is at its build position now: the next contact pass's quiet reach is its
+        # rounding margin, not the displacement that called this build (`kernels/contact.py`)
+        S.max_disp[None] = 0.0
 
     @ti.kernel
     def cell_order(n: ti.i32):

@@ -213,7 +213,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     def quiet_reach():
         """How far apart two particles listed at the last neighbour build may now have come closer:
         twice the largest displacement since then (S.max_disp holds it squared, from the last
-        kick-drift; larger after a build), plus `quiet_margin` for rounding. A partner whose gap
+        kick-drift; 0 after a build), plus `quiet_margin` for rounding. A partner whose gap
         was wider cannot touch yet."""
         return 2.0 * ti.sqrt(S.max_disp[None]) + quiet_margin
 

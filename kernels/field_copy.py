@@ -39,7 +39,9 @@ class Slot:
         return math.prod(self.array_shape)
 
 
-SERIAL_VALUES = 4096  # a loop copying at most this many values runs in the calling thread
+# a loop copying at most this many values runs in the calling thread: a time-series sample's particle
+# arrays of fluidized_tube (52 000 values) in 0.07 ms, against 0.11 ms in a parallel loop
+SERIAL_VALUES = 65536
 
 
 def _components(field: Field) -> tuple[int, ...]:

@@ -92,6 +92,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             solver = solver or Solver(model)
             if resume is not None:
                 checkpoint.restore(solver, *resume)
+            out.prepare(solver)  # the output's reads compiled before the clock starts
+            checkpoint.prepare(solver)
     except (RunError, checkpoint.CheckpointError) as exc:
         out.close()
         data = summary(model, None, "failed", 0.0, str(exc))

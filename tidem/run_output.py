@@ -62,7 +62,7 @@ class Output:
             else:
                 (self.dir / pvd).unlink(missing_ok=True)
         self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
-        self._particles = None  # the snapshot's particle fields, read in one launch per element type (`snapshot`)
+        self._particles = None  # the snapshot's particle fields (`_particle_copier`)
         self._writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tidem-snapshots")
         self._pending: list[tuple[Future, Path, Callable | None]] = []
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
@@ -76,16 +76,32 @@ class Output:
                                          loop.get("averages") if loop else None)
                          if model.features.averaging else None)
 
+    def prepare(self, solver: Solver) -> None:
+        """Compile the reads of a time-series sample and a snapshot by taking them once, writing nothing:
+        the run loop calls this before its clock starts, with `checkpoint.prepare`, so that a run's
+        particle-steps per second are its stepping's (their first calls inside the loop took 0.04-0.07 s
+        each on fluidized_tube, the first checkpoint 0.3 s; `benchmarks/README.md`)."""
+        solver.sample_tallies()
+        if self.bed_height or self.model.features.heat:
+            solver.particle_stats.sample(solver.n, self.bed_height)
+        if solver.gas is not None:
+            solver.gas.host_fields()
+        self._particle_copier(solver).read()
+
+    def _particle_copier(self, solver: Solver) -> FieldCopier:
+        """The snapshot's particle fields, read in one launch per element type."""
+        if self._particles is None:
+            S = solver.state
+            self._particles = FieldCopier({name: getattr(S, name) for name in SNAPSHOT_FIELDS if hasattr(S, name)})
+        return self._particles
+
     def snapshot(self, solver: Solver, on_written: Callable[[Path], None] | None = None) -> Path:
         """Write the next snapshot and list it in snapshots.pvd; returns its file. The particles and
         the gas are copied from the solver here; the files are written by the writer thread while the
         next steps run (at most WRITES_AHEAD snapshots behind; `flush` waits for them). `on_written`
         is called with the file once it is on disk, in this thread (`poll`, `flush`): the background
         renderer it starts dies with the thread that started it (PR_SET_PDEATHSIG)."""
-        if self._particles is None:
-            S = solver.state
-            self._particles = FieldCopier({name: getattr(S, name) for name in SNAPSHOT_FIELDS if hasattr(S, name)})
-        host = self._particles.read()
+        host = self._particle_copier(solver).read()
         idx = np.flatnonzero(host["active"])
         ident = host["ident"][idx]  # index in the scene (storage is re-sorted as the bed flows)
         name = f"snap_{len(self.entries):05d}.vtp"

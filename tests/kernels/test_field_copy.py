@@ -4,7 +4,7 @@ field's array exactly what its to_numpy() gives and what from_numpy() takes."""
 import numpy as np
 import taichi as ti
 
-from tidem.kernels.field_copy import FieldCopier
+from tidem.kernels.field_copy import SERIAL_VALUES, FieldCopier
 
 
 def _fields() -> dict:
@@ -23,8 +23,8 @@ def _fields() -> dict:
         "faces": ti.field(ti.i32, shape=(5, 1, 6)),
         "matrix": ti.Matrix.field(2, 3, ti.f64, shape=(2, 4)),
         "column": ti.Matrix.field(19, 1, ti.f64, shape=(2,)),
-        "big": ti.Vector.field(3, ti.f64, shape=1500),  # over SERIAL_VALUES: a parallel loop
-        "big_rows": ti.field(ti.i32, shape=(1500, 4)),
+        "big": ti.Vector.field(3, ti.f64, shape=SERIAL_VALUES // 3 + 1),  # over SERIAL_VALUES: a parallel loop
+        "big_rows": ti.field(ti.i32, shape=(SERIAL_VALUES // 4 + 1, 4)),
     }
 
 
