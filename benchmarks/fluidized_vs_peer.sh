@@ -19,10 +19,15 @@ import json, sys
 d = json.load(open(sys.argv[1]))
 print('    ' + ', '.join(f'{k} {v[\"ms_per_step\"]:.3f}' for k, v in d['profile'].items()) + ' ms/step')" "$1/run.json"
 }
+peer() {
+  "$py" -P -m tidem bench --sizes 10000 --precision float64 2>&1 | tail -1 | sed "s/^/round $1 peer bed:/"
+}
 for r in $(seq 1 "$rounds"); do
-  "$py" -P -m tidem bench --sizes 10000 --precision float64 2>&1 | tail -1 | sed "s/^/round $r peer bed:/"
+  # the peer bed first in odd rounds and last in even ones, so that a VM slowing through a round
+  # biases neither side
+  if [ $((r % 2)) = 1 ]; then peer "$r"; fi
   names=this
-  [ -n "$base" ] && names="base this"
+  [ -n "$base" ] && names=$([ $((r % 2)) = 1 ] && echo "base this" || echo "this base")
   for name in $names; do
     path=$([ "$name" = base ] && echo "$base" || echo "")  # this tree: the installed (editable) package
     rm -rf "$work/ft_$name"
@@ -30,4 +35,5 @@ for r in $(seq 1 "$rounds"); do
       | grep finished | sed "s/^/round $r fluidized_tube ($name): /"
     profile "$work/ft_$name"
   done
+  if [ $((r % 2)) = 0 ]; then peer "$r"; fi
 done
