@@ -4,7 +4,9 @@
 # only figures of one run of this script). Prints each run's particle-steps/s and its phase profile.
 #   benchmarks/fluidized_vs_peer.sh WORKDIR [ROUNDS] [BASE]
 # BASE: an older tree laid out as an installed package (git archive REV | tar -x -C BASE, then
-# kernels/ and scenes/ copied into BASE/tidem/), run with PYTHONPATH=BASE python -P.
+# kernels/ and scenes/ copied into BASE/tidem/), run with PYTHONPATH=BASE python -P. The peer bed takes
+# PEER_STEPS steps (default 10000, about 4 s: the bench's 2000 let a moment's slowing of the VM decide a
+# round).
 set -euo pipefail
 work=${1:?usage: fluidized_vs_peer.sh WORKDIR [ROUNDS] [BASE]}
 rounds=${2:-3}
@@ -20,7 +22,7 @@ d = json.load(open(sys.argv[1]))
 print('    ' + ', '.join(f'{k} {v[\"ms_per_step\"]:.3f}' for k, v in d['profile'].items()) + ' ms/step')" "$1/run.json"
 }
 peer() {
-  "$py" -P -m tidem bench --sizes 10000 --precision float64 2>&1 | tail -1 | sed "s/^/round $1 peer bed:/"
+  "$py" -P -m tidem bench --sizes 10000 --precision float64 --steps "${PEER_STEPS:-10000}" 2>&1 | tail -1 | sed "s/^/round $1 peer bed:/"
 }
 for r in $(seq 1 "$rounds"); do
   # the peer bed first in odd rounds and last in even ones, so that a VM slowing through a round

@@ -20,9 +20,10 @@ Algorithm (O(N) per rebuild):
    each group by partner index (so the result does not depend on thread timing). The contact
    pass's branch on contact then turns once in a row instead of at random: 9-12 % of the pass on
    the peer bed (`benchmarks/README.md`). Find each partner that touches i in the old row (`src[i,
-   k]`: the old slot, -1 for a new pair and for a partner apart, whose history is zero); a pair listed before in the partner's row (its owner changed: one of
-   the two crossed into another slab) takes its history from there, seen from the new owner's
-   side (springs change sign), through a buffer (`flip_*`, `src` = -2 - entry);
+   k]`: the old slot, -1 for a new pair and for a partner apart, whose history is zero); a pair
+   listed before in the partner's row (its owner changed: one of the two crossed into another slab)
+   takes its history from there, seen from the new owner's side (springs change sign), through a
+   buffer (`flip_*`, `src` = -2 - entry);
 4. carry the history within the row, in place (`move_rows`);
 5. note how many partners touch i (`nbr_touch`, listed first) and the smallest gap to the others
    (`nbr_gap` [m], float32), whose history is zeroed: the contact passes skip those quiet partners
@@ -59,10 +60,10 @@ def scan_blocks(n_cells: int) -> int:
 def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False,
                           after=(), uniform: tuple[float, float] | None = None, slab_lists: bool | None = None):
     """Return the kernels (rebuild(n), cell_order(n)). `rebuild` refreshes `S.nbr`, `S.nbr_n`, the
-    slabs (`S.slab`, `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, then
-    the Taichi funcs f(n) in `after`, in one kernel launch). `cell_order` writes the particles in
-    cell order to `S.sorted_idx[0:n]` (step 1's counting sort, the inactive ones after the active,
-    in any order): a storage sort's order on a GPU (`tidem.storage_order`).
+    slabs (`S.slab`, `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, and the
+    Taichi funcs f(i) in `after` on each particle in step 4's loop, in one kernel launch). `cell_order`
+    writes the particles in cell order to `S.sorted_idx[0:n]` (step 1's counting sort, the inactive
+    ones after the active, in any order): a storage sort's order on a GPU (`tidem.storage_order`).
 
     S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
     grow) each row also records the particle's radius at the build, `S.r_build`. `uniform`: (radius, mass)
@@ -366,6 +367,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             for k in range(count):
                 S.nbr[i, k] = S.nbr_new[i, k]
             S.nbr_n[i] = count
+            for then in ti.static(after):  # each particle's own work after a build, in the same loop
+                then(i)
 
     @ti.kernel
     def rebuild(n: ti.i32):
@@ -377,8 +380,6 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
         S.flips[None] = 0
         build_rows(n)
         move_rows(n)
-        for then in ti.static(after):
-            then(n)
         # every particle is at its build position now: the next contact pass's quiet reach is its
         # rounding margin, not the displacement that called this build (`kernels/contact.py`)
         S.max_disp[None] = 0.0

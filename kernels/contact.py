@@ -85,7 +85,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     """Return a namespace of the kernel `forces(n, t, dt, conduct, diag)` (both passes), `passes(then)`,
     which makes the Taichi func of both passes that calls the Taichi func then(i, t, dt, drift, kick) on
     every particle whose sums are complete (`kernels/integrate.py` fuses the kick with them); `finish(i, t)` (the
-    contact times, None without them) and `mark_near(n)` (below). With heat, `conduct` = m > 0 evaluates
+    contact times, None without them) and `mark_near(i)` (below). With heat, `conduct` = m > 0 evaluates
     the conduction and books the heat of m steps (q[i] = m x the heat flow: heat.conduction_interval =
     m evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
     0; the surfaces' heat flows of the last evaluation hold); S.conduct[None] tells the kick. `diag` = 1
@@ -108,7 +108,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     point, tube_bin_T[k, b]; with `wall_foil`, a plane with plane_foil[s][0] > 0 has its foil's
     temperature plane_foil_T[s]. `cull` (bit s: surface s does not move) lets each particle skip the
     static surfaces farther than `surface_reach` (skin plus the conduction reach) at the last neighbour
-    build, as marked in S.near by the Taichi func `mark_near(n)` (None without culling; the neighbour
+    build, as marked in S.near by the Taichi func `mark_near(i)` (None without culling; the neighbour
     build runs it); a particle far from every wall and tube then costs no surface evaluation at all.
     `grain_scale` k > 1: every particle is a parcel of k^3 grains (one k per scene with heat) and
     conducts as those grains do (kernels/heat.py). `atomic`: atomic sums, one thread per particle
@@ -116,7 +116,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     partners (module docstring) with that rounding margin; 0: evaluate every listed pair. `meshes`: (mesh
     count, candidates per particle, contact slots per particle, on-triangle tolerance [m], how far beyond
     its radius a particle lists triangles [m]) adds the
-    mesh walls (`kernels/mesh_contact.py`); the namespace's `list_meshes(n)` is then their broad phase,
+    mesh walls (`kernels/mesh_contact.py`); the namespace's `list_meshes(i)` is then their broad phase,
     which the neighbour build runs."""
     if atomic is None:
         atomic = not in_order()

@@ -102,8 +102,8 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
     """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
     torque, heat_in, worst, touching)`, which adds particle i's contacts with every mesh to the sums
     handed in (force, torque, heat flow into i [W], largest overlap / r_i, contacts) and returns them;
-    `list_candidates(n)` (the broad phase, run by the neighbour build). `n_surf`: planes and tubes
-    before the meshes in the surface tables (S.ps, surf_T, surf_rate); `M`, `WM`: candidates and
+    `list_candidates(i)` (the broad phase, run on each particle by the neighbour build). `n_surf`: planes
+    and tubes before the meshes in the surface tables (S.ps, surf_T, surf_rate); `M`, `WM`: candidates and
     contact slots per particle; `reach`: how far beyond its radius a particle lists triangles (skin
     and gas lens); `on_tol`: the distance within which a point lies on a triangle; `grid_funcs`:
     (cell_coord, cell_id) of the neighbour grid; `radius_of`: `kernels/sizes.py`."""
@@ -301,36 +301,36 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
         return force, torque, heat_in, worst, touching
 
     @ti.func
-    def list_candidates(n):
-        """mc_tri / mc_n: the triangles within r_i + reach of each active particle (the broad phase);
-        mc_flat: the first of them where they all lie in one flat patch (tri_patch), else -1."""
-        for i in range(n):
-            if S.active[i]:
-                x = S.x[i]
-                r = radius_of(i) + reach
-                c = cell_id(cell_coord(x))
-                cnt = 0
-                patch = -1
-                flat = -1  # a listed triangle where all lie in one flat patch (the first one's), else -1
-                for e in range(S.mbin_start[c], S.mbin_start[c + 1]):
-                    k = S.mbin_tri[e]
-                    _p, _f, d2 = nearest(x, k)
-                    if d2 < r * r:
-                        if cnt < M:
-                            S.mc_tri[i, cnt] = k
-                        own = S.tri_patch[k]
-                        if cnt == 0:
-                            patch, flat = own, k
-                        if own != patch or own < 0:
-                            patch = -2
-                        cnt += 1
-                if cnt > M:
-                    ti.atomic_max(S.overflow[3], cnt)
-                S.mc_n[i] = ti.min(cnt, M)
-                S.mc_flat[i] = ti.select(patch >= 0, flat, -1)
-                if cnt == 0:  # out of every mesh's reach until the next build: no contact holds a slot
-                    for q in range(WM):
-                        S.mh_id[i, q] = -1
+    def list_candidates(i):
+        """mc_tri / mc_n: the triangles within r_i + reach of particle i, if active (the broad phase, run on
+        each particle by the neighbour build); mc_flat: the first of them where they all lie in one flat
+        patch (tri_patch), else -1."""
+        if S.active[i]:
+            x = S.x[i]
+            r = radius_of(i) + reach
+            c = cell_id(cell_coord(x))
+            cnt = 0
+            patch = -1
+            flat = -1  # a listed triangle where all lie in one flat patch (the first one's), else -1
+            for e in range(S.mbin_start[c], S.mbin_start[c + 1]):
+                k = S.mbin_tri[e]
+                _p, _f, d2 = nearest(x, k)
+                if d2 < r * r:
+                    if cnt < M:
+                        S.mc_tri[i, cnt] = k
+                    own = S.tri_patch[k]
+                    if cnt == 0:
+                        patch, flat = own, k
+                    if own != patch or own < 0:
+                        patch = -2
+                    cnt += 1
+            if cnt > M:
+                ti.atomic_max(S.overflow[3], cnt)
+            S.mc_n[i] = ti.min(cnt, M)
+            S.mc_flat[i] = ti.select(patch >= 0, flat, -1)
+            if cnt == 0:  # out of every mesh's reach until the next build: no contact holds a slot
+                for q in range(WM):
+                    S.mh_id[i, q] = -1
 
     return SimpleNamespace(visit=visit, list_candidates=list_candidates)
 

@@ -30,7 +30,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                           wall_foil: bool, cull: int, surface_reach: float, grain_scale: float, min_image, radius_of):
     """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
     torque, heat_in, worst, touching)`, which adds particle i's contacts with every plane and tube to
-    the sums it is handed and returns them; `mark_near(n)` (None without `cull`). `respond`: the contact
+    the sums it is handed and returns them; `mark_near(i)` (None without `cull`). `respond`: the contact
     law (`contact_laws.make_contact_response`); `s_one`: each surface's material-surface parameter
     vector where all particles are of one material (constants of the kernel), else None (S.ps);
     `min_image`, `radius_of`: `kernels/geometry.py`, `kernels/sizes.py`."""
@@ -205,17 +205,16 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
         return force, torque, heat_in, worst, touching
 
     @ti.func
-    def mark_near_surfaces(n):
-        """near[i] bit s: static surface s is within reach of particle i (run after each neighbour
-        build, in its kernel; until the next one no particle moves more than half the skin)."""
-        for i in range(n):
-            if S.active[i]:
-                bits = 0
-                for s in ti.static(range(n_surf)):
-                    if ti.static(cull >> s & 1):
-                        delta, _n, _u = surface_contact(i, s, 0.0)
-                        if -delta < surface_reach:
-                            bits |= 1 << s
-                S.near[i] = bits
+    def mark_near_surfaces(i):
+        """near[i] bit s: static surface s is within reach of particle i (run on each particle by the
+        neighbour build, in its kernel; until the next one no particle moves more than half the skin)."""
+        if S.active[i]:
+            bits = 0
+            for s in ti.static(range(n_surf)):
+                if ti.static(cull >> s & 1):
+                    delta, _n, _u = surface_contact(i, s, 0.0)
+                    if -delta < surface_reach:
+                        bits |= 1 << s
+            S.near[i] = bits
 
     return SimpleNamespace(visit=visit, mark_near=mark_near_surfaces if cull else None, n_surf=n_surf)
