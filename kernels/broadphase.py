@@ -30,8 +30,9 @@ Algorithm (O(N) per rebuild):
    while no particle has moved far enough to close that gap (`kernels/contact.py`).
 Steps 2 and 3 read the old rows only and run in one loop, row by row; step 4 is a loop of its own,
 so that no row changes while another particle reads it. On this 2-core VM a bubbling bed's build
-(fluidized_tube, 13 000 grains) went from ten parallel loops to three: each costs a wake-up of the
-thread pool, tens of microseconds on average (`benchmarks/README.md`).
+(fluidized_tube, 13 000 grains) went from ten parallel loops to two (step 2 with 3, step 4 with the
+`after` funcs): each costs a wake-up of the thread pool, tens of microseconds on average
+(`benchmarks/README.md`).
 
 A row longer than the capacity K is counted in `overflow`; the run loop turns that into an
 error that names the setting to raise (never a silent drop).
