@@ -21,6 +21,8 @@ from taichi.lang.field import Field
 from taichi.lang.matrix import MatrixField
 from taichi.lang.util import to_numpy_type
 
+from .ordered import in_order
+
 
 @dataclass(frozen=True)
 class Slot:
@@ -39,9 +41,11 @@ class Slot:
         return math.prod(self.array_shape)
 
 
-# a loop copying at most this many values runs in the calling thread: a time-series sample's particle
-# arrays of fluidized_tube (52 000 values) in 0.07 ms, against 0.11 ms in a parallel loop
+# a loop copying at most this many values runs in the calling thread on the CPU: a time-series sample's
+# particle arrays of fluidized_tube (52 000 values) in 0.07 ms, against 0.11 ms in a parallel loop; on a
+# GPU, where one thread is thousands of times slower than the device, only the small groups
 SERIAL_VALUES = 65536
+SERIAL_VALUES_GPU = 4096
 
 
 def _components(field: Field) -> tuple[int, ...]:
@@ -55,7 +59,8 @@ def _make_copy(slots: list[Slot], to_host: bool):
     shapes = list(dict.fromkeys(s.shape for s in slots))
     groups = [(shape, [s for s in slots if s.shape == shape]) for shape in shapes]
     # a small group in one thread: a parallel loop waits about 50-100 us for the thread pool here
-    serial = [sum(s.size for s in members) <= SERIAL_VALUES for _shape, members in groups]
+    limit = SERIAL_VALUES if in_order() else SERIAL_VALUES_GPU
+    serial = [sum(s.size for s in members) <= limit for _shape, members in groups]
 
     @ti.func
     def copy_slot(buf: ti.template(), s: ti.template(), I: ti.template(), lin):

@@ -45,8 +45,8 @@ from tidem.pour import Pourer
 from tidem.runtime import hot
 from tidem.state import State, allocate
 from tidem.state_fill import load_bins
+from tidem.solver_reads import TallyReads
 from tidem.storage_order import SCRATCH, sort_storage, sorts_storage
-from tidem.surfaces import is_heated
 
 
 # The small fields the host reads at health checks and time-series samples, copied all at once (`kernels/field_copy.py`:
@@ -58,7 +58,7 @@ class RunError(RuntimeError):
     """The simulation became invalid; the message names the particle or setting and the fix."""
 
 
-class Solver:
+class Solver(TallyReads):
     """Advance a Model's State in time."""
 
     def __init__(self, model: Model):
@@ -336,66 +336,6 @@ class Solver:
                 f"particle {S.ident[worst_at]} overlaps a neighbour or wall by {100 * worst:.1f} % of its radius at t = {self.t:.6g} s "
                 f"(limit {100 * limit:.0f} %): the contacts are too soft or too fast for this step; raise "
                 "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
-
-    def sample_tallies(self) -> dict[str, np.ndarray]:
-        """Every tally after a time-series sample's reductions (`kernels/diagnostics.make_energy_kernel`:
-        energies, largest overlap, first non-finite position; one launch, one read) for `energies`,
-        `largest_overlap`, `outlet_summary` and `heat_summary` (about 0.5 ms a sample less than each
-        reading its own, `benchmarks/README.md`)."""
-        self._sample_sums(self.n)
-        return self._tallies.read()
-
-    def outlet_summary(self, tallies: dict | None = None) -> dict:
-        """Mass [kg] and number of the particles a sink outlet has taken or a recycle outlet has moved
-        to the top (empty without either); `tallies`: a read of them (else read here)."""
-        if not (self.model.features.sink or self.model.features.recycle):
-            return {}
-        mass, count = (tallies or self._tallies.read())["sink_sum"]
-        return dict(discharged_mass_kg=float(mass), discharged_particles=int(count))
-
-    def health(self, tallies: dict | None = None) -> tuple[int, int, float]:
-        """(first active particle with a non-finite position, or n; first with the largest overlap
-        ratio; that ratio), reduced on the device (`kernels/diagnostics.py`); `tallies`: a read of
-        them just after the health kernel (else it runs here)."""
-        if tallies is None:
-            self._health(self.n)
-            tallies = self._tallies.read()
-        bad, worst_at = (int(v) for v in tallies["worst_at"])
-        return bad, worst_at, float(tallies["worst"])
-
-    def largest_overlap(self, tallies: dict) -> float:
-        """The largest overlap ratio of `sample_tallies`."""
-        return float(tallies["worst"])
-
-    def energies(self, tallies: dict | None = None) -> dict:
-        """Kinetic, rotational and potential energy [J], contacts per particle, active count;
-        `tallies`: those of `sample_tallies` (else the energies are summed here)."""
-        if tallies is None:
-            self._energies(self.n)
-            tallies = self._tallies.read()
-        e_kin, e_rot, e_pot, contacts, active = (float(v) for v in tallies["sums"])
-        return dict(kinetic_energy_J=e_kin, rotational_energy_J=e_rot, potential_energy_J=e_pot,
-                    coordination=contacts / max(active, 1.0), particles=int(active))
-
-    def heat_summary(self, tallies: dict | None = None) -> dict:
-        """Heat flow [W] and heat [J] per heated surface (the particles' temperatures:
-        `particle_stats`); `tallies`: a read of them (else read here)."""
-        out = {}
-        tallies = tallies or self._tallies.read()
-        rate, energy = tallies["surf_rate"], tallies["surf_energy"]
-        f = self.model.features
-        n_planes = len(self.model.planes)
-        foil_T = list(tallies["plane_foil_T"] if f.wall_foil else [None] * n_planes)
-        foil_T += list(tallies["tube_bin_T"].mean(axis=1) if f.foil else [None] * len(self.model.tubes))
-        meshes = [m.surface() for m in self.model.meshes]
-        for s, surf in enumerate(self.model.planes + self.model.tubes + meshes):
-            if is_heated(surf):
-                key = surf["name"].replace(" ", "_").replace("[", "").replace("]", "")
-                out[f"{key}_heat_W"] = float(rate[s])
-                out[f"{key}_heat_J"] = float(energy[s])
-                if surf.get("flux") is not None:
-                    out[f"{key}_foil_T_K"] = float(foil_T[s])
-        return out
 
     def release(self) -> None:
         self.particle_stats.release()
