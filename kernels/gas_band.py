@@ -30,12 +30,15 @@ def slowest_axis(cells) -> int:
     return max(range(3), key=lambda a: (cells[a], a))
 
 
-def band_width(gg) -> int:
-    """Half-bandwidth w of the direct solve of grid `gg`, or 0 where the CG solves (see the module)."""
+def band_width(gg, cpu: bool | None = None) -> int:
+    """Half-bandwidth w of the direct solve of grid `gg`, or 0 where the CG solves (see the module); `cpu`:
+    whether the steps run on the CPU (None: on Taichi's present backend)."""
     n = gg.cells
     s = slowest_axis(n)
     width = n[0] * n[1] * n[2] // n[s]
-    if not in_order() or width > MAX_BAND or (gg.periodic[s] and n[s] > 2):
+    if cpu is None:
+        cpu = in_order()
+    if not cpu or width > MAX_BAND or (gg.periodic[s] and n[s] > 2):
         return 0
     return width
 

@@ -143,6 +143,17 @@ def test_scenes_lists_shipped_with_runtime():
     assert "run time:" in result.output
 
 
+@pytest.mark.parametrize("name, solve", [
+    ("fluidized_tube", "pressure solved directly on the CPU (banded Cholesky, half-bandwidth 20 cells), by Jacobi-preconditioned CG"),
+    ("lab_fluidized_bundle", "pressure solved by Jacobi-preconditioned CG (tolerance 1e-08, at most")])
+def test_check_names_the_pressure_solve(name, solve):
+    """`tidem check` says whether a gas scene's pressure is solved directly (a thin grid on the CPU,
+    `kernels/gas_band.py`) or by CG."""
+    result = runner.invoke(app, ["check", name])
+    assert result.exit_code == 0, result.output
+    assert solve in result.output, result.output
+
+
 def test_check_prints_derived_numbers():
     result = runner.invoke(app, ["check", "moving_bed_tubes"])
     assert result.exit_code == 0, result.output

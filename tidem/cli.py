@@ -217,13 +217,18 @@ def check(
 
 
 def gas_line(model) -> str:
-    """`tidem check`'s line on the gas grid and the voidage its grains see."""
+    """`tidem check`'s line on the gas grid, the voidage its grains see and how the pressure is solved."""
     from tidem.gas_geometry import gas_grid, voidage_layers
+    from tidem.kernels.gas_band import band_width
 
+    gas = model.scene.gas
     gg = gas_grid(model.scene)
     layers = voidage_layers(model)
+    width = band_width(gg, cpu=True)
+    cg = f"Jacobi-preconditioned CG (tolerance {gas.tolerance:g}, at most {gas.max_iterations} iterations)"
+    solve = (f"directly on the CPU (banded Cholesky, half-bandwidth {width} cells), by {cg} on a GPU" if width else f"by {cg}")
     return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
-            f"sees: {model.scene.gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else ""))
+            f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + f"; pressure solved {solve}")
 
 
 @app.command()
