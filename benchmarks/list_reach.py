@@ -1,7 +1,8 @@
 """What a scene's Verlet rows hold between neighbour builds, from a checkpoint: per particle the partners
-that touched at the build, the quiet ones (apart then), and how many of those the contact pass must
-evaluate now (all of a row's, where its nearest is within the pass's reach) and by three bounds on how
-far two grains may have closed since the build:
+that touched at the build, the quiet ones (apart then), how many of those a contact pass evaluates
+(with them in one group: all of a row's where its nearest is within the pass's reach; in the groups of
+`kernel_settings.quiet_bounds`: up to the last group whose nearest is within reach), and how many lie
+within three bounds on how far two grains may have closed since the build:
   * "twice the largest": 2 max_k |D_k| (the pass's reach, `kernels/pair_contact.py`);
   * "own + largest": |D_i| + max_k |D_k| (a per-particle reach);
   * "pairwise": |D_i| + |D_j| (needs the partner's displacement);
@@ -22,6 +23,7 @@ import numpy as np
 
 from tidem import checkpoint, runtime
 from tidem.cli_common import build_or_exit, load_scene
+from tidem.kernel_settings import quiet_bounds
 from tidem.launch import load_checkpoint
 from tidem.solver import Solver
 
@@ -37,7 +39,8 @@ def displacements(S, n, x0, lengths, periodic):
 def rows(solver, steps, lengths, periodic):
     S, n = solver.state, solver.n
     slot = np.arange(S.nbr.shape[1])
-    tot = np.zeros(6)
+    tot = np.zeros(7)
+    bounds = quiet_bounds(solver.model)
     for _ in range(steps):
         solver.advance(1)
         cnt, touch, nbr = S.nbr_n.to_numpy()[:n], S.nbr_touch.to_numpy()[:n], S.nbr.to_numpy()[:n]
@@ -50,14 +53,21 @@ def rows(solver, steps, lengths, periodic):
             if periodic[a]:
                 sep[:, a] -= lengths[a] * np.round(sep[:, a] / lengths[a])
         gap = np.linalg.norm(sep, axis=1) - r[i] - r[j]  # at the build
+        reach = 2 * d.max()
         row_min = np.full(n, np.inf)
         np.minimum.at(row_min, i, gap)
-        tot += [touch.sum(), len(i), (row_min[i] <= 2 * d.max()).sum(), (gap <= 2 * d.max()).sum(),
+        group = sum(gap >= b for b in bounds)
+        last = np.full(n, -1)  # each row's last group whose nearest partner is within reach
+        for g in range(len(bounds) + 1):
+            group_min = np.full(n, np.inf)
+            np.minimum.at(group_min, i[group == g], gap[group == g])
+            last = np.where(group_min <= reach, g, last)
+        tot += [touch.sum(), len(i), (row_min[i] <= reach).sum(), (group <= last[i]).sum(), (gap <= reach).sum(),
                 (gap <= d[i] + d.max()).sum(), (gap <= d[i] + d[j]).sum()]
     per = tot / (n * steps)
-    print(f"per particle, mean of {steps} steps: touching {per[0]:.2f}, quiet {per[1]:.2f}; the pass evaluates "
-          f"{per[2]:.2f} (rows whose nearest quiet partner is within twice the largest displacement); quiet within "
-          f"twice the largest displacement {per[3]:.2f}, own + largest {per[4]:.2f}, pairwise {per[5]:.2f}")
+    print(f"per particle, mean of {steps} steps: touching {per[0]:.2f}, quiet {per[1]:.2f}; of those a pass "
+          f"evaluates {per[2]:.2f} with the quiet partners in one group, {per[3]:.2f} in {len(bounds) + 1} (quiet_bounds); "
+          f"within twice the largest displacement {per[4]:.2f}, own + largest {per[5]:.2f}, pairwise {per[6]:.2f}")
     print("displacement quantiles 0.5 / 0.9 / 0.99 / 0.999 of the largest:",
           " / ".join(f"{q:.2f}" for q in np.quantile(d, [0.5, 0.9, 0.99, 0.999]) / d.max()))
 

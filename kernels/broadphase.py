@@ -16,18 +16,21 @@ Algorithm (O(N) per rebuild):
    successor), in the row of the lower `ident` (the particle's scene index, which a storage
    re-sort does not change); the contact pass (`kernels/contact.py`) evaluates it there and adds
    the reaction to the partner, which lies in the owner's slab or the next one;
-3. sort the row in the scratch rows `nbr_new`: the partners that touch i first, then the others,
-   each group by partner index (so the result does not depend on thread timing). The contact
-   pass's branch on contact then turns once in a row instead of at random: 9-12 % of the pass on
-   the peer bed (`benchmarks/README.md`). Find each partner that touches i in the old row (`src[i,
+3. sort the row in the scratch rows `nbr_new`: the partners that touch i first, then the others in
+   their groups (step 5), each group by partner index (so the result does not depend on thread
+   timing). The contact pass's branch on contact then turns once in a row instead of at random: 9-12 %
+   of the pass on the peer bed (`benchmarks/README.md`). Find each partner that touches i in the old row (`src[i,
    k]`: the old slot, -1 for a new pair and for a partner apart, whose history is zero); a pair
    listed before in the partner's row (its owner changed: one of the two crossed into another slab)
    takes its history from there, seen from the new owner's side (springs change sign), through a
    buffer (`flip_*`, `src` = -2 - entry);
 4. carry the history within the row, in place (`move_rows`);
-5. note how many partners touch i (`nbr_touch`, listed first) and the smallest gap to the others
-   (`nbr_gap` [m], float32), whose history is zeroed: the contact passes skip those quiet partners
-   while no particle has moved far enough to close that gap (`kernels/contact.py`).
+5. note how many partners touch i (`nbr_touch`, listed first). The others, whose history is zeroed,
+   follow in QUIET_GROUPS groups by their gap (below `bounds[0]`, up to `bounds[1]`, ..., beyond: with
+   the run's bounds half the contact skin, the skin, and the partners listed for the gas lens alone),
+   each group by partner index; note where each group ends (`nbr_end`) and its smallest gap (`nbr_gap`
+   [m], float32): the contact passes skip a group while no particle has moved far enough to close that
+   gap (`kernels/pair_contact.py`).
 Steps 2 and 3 read the old rows only and run in one loop, row by row; step 4 is a loop of its own,
 so that no row changes while another particle reads it. On this 2-core VM a bubbling bed's build
 (fluidized_tube, 13 000 grains) went from ten parallel loops to two (step 2 with 3, step 4 with the
@@ -51,6 +54,9 @@ SCAN_BLOCK = 1024  # cells a thread sums in the prefix sum of a large grid
 # average on a 2-core VM), more than these loops' work for such a bed (13 000 grains: 0.08 ms in one
 # thread against 0.44 ms in seven parallel loops, `benchmarks/README.md`; the work grows with the bed).
 SERIAL_PARTICLES = 32768
+# The quiet partners of a row (apart at the build) in groups by their gap then (step 5): a contact pass
+# evaluates a group only where the group's nearest partner may have closed that gap since.
+QUIET_GROUPS = 3
 
 
 def scan_blocks(n_cells: int) -> int:
@@ -59,7 +65,8 @@ def scan_blocks(n_cells: int) -> int:
 
 
 def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: bool, S, growth: bool = False,
-                          after=(), uniform: tuple[float, float] | None = None, slab_lists: bool | None = None):
+                          after=(), uniform: tuple[float, float] | None = None, slab_lists: bool | None = None,
+                          bounds: tuple[float, ...] = ()):
     """Return the kernels (rebuild(n), cell_order(n)). `rebuild` refreshes `S.nbr`, `S.nbr_n`, the
     slabs (`S.slab`, `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, and the
     Taichi funcs f(i) in `after` on each particle in step 4's loop, in one kernel launch). `cell_order`
@@ -70,8 +77,10 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     grow) each row also records the particle's radius at the build, `S.r_build`. `uniform`: (radius, mass)
     of every particle (`kernels/sizes.py`), or None. `slab_lists`: whether the contact passes sweep
     slab lists (`kernels/contact.py`; None: on the CPU, where they do); without, the serial pass that
-    lists them is left out (on a GPU it ran in one thread: 700 000 particles a build).
+    lists them is left out (on a GPU it ran in one thread: 700 000 particles a build). `bounds`: the gaps
+    [m] that divide the quiet partners into QUIET_GROUPS groups (step 5; ascending, below `skin`).
     """
+    assert len(bounds) == QUIET_GROUPS - 1 and list(bounds) == sorted(bounds), bounds
     if slab_lists is None:
         slab_lists = in_order()
     serial = in_order() and S.x.shape[0] <= SERIAL_PARTICLES  # the counting sort's loops in the calling thread
@@ -95,7 +104,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     capacity = S.x.shape[0]
     MOVED = K  # a `src` no slot has: the slot holds its new history (move_rows)
-    QUIET = 1e30  # nbr_gap of a row whose partners all touch
+    QUIET = 1e30  # nbr_gap of an empty quiet group
 
     @ti.func
     def count_cells(n):
@@ -249,17 +258,50 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 key = S.nbr_new[i, a]
                 touching += ti.cast(key < capacity, ti.i32)
                 S.nbr_new[i, a] = ti.select(key >= capacity, key - capacity, key)
-            gap = QUIET
-            for a in range(touching, count):  # the quiet partners' smallest gap (step 5)
-                j = S.nbr_new[i, a]
-                gap = ti.min(gap, min_image(S.x[j] - xi).norm() - ri - radius_of(j))
             S.nbr_count[i] = count
             S.nbr_touch[i] = touching
-            S.nbr_gap[i] = gap
+            group_rows(i, xi, ri, touching, count)
             S.x_build[i] = xi
             if ti.static(growth):
                 S.r_build[i] = S.radius[i]
             match_row(i)
+
+    @ti.func
+    def group_rows(i, xi, ri, touching, count):
+        """Step 5: the quiet partners (slots touching .. count - 1 of nbr_new, by index) in their groups by
+        gap, each still by index (a stable counting sort through the scratch row `src`, which match_row
+        writes after), with each group's end and smallest gap."""
+        ends = ti.Vector([touching] * QUIET_GROUPS)  # where each quiet group ends in the row
+        gaps = ti.Vector([QUIET] * QUIET_GROUPS, dt=ti.f32)  # each group's smallest gap
+        for a in range(touching, count):
+            j = S.nbr_new[i, a]
+            gap = ti.cast(min_image(S.x[j] - xi).norm() - ri - radius_of(j), ti.f32)
+            group = 0
+            for b in ti.static(bounds):
+                group += ti.cast(gap >= b, ti.i32)
+            for g in ti.static(range(QUIET_GROUPS)):  # (selects: the groups follow no pattern a branch could learn)
+                gaps[g] = ti.select(group == g, ti.min(gaps[g], gap), gaps[g])
+                ends[g] += ti.cast(group <= g, ti.i32)
+            S.src[i, a] = j + group * capacity
+        starts = ends
+        for g in ti.static(range(1, QUIET_GROUPS)):
+            starts[g] = ends[g - 1]
+        starts[0] = touching
+        for a in range(touching, count):
+            key = S.src[i, a]
+            group = 0
+            for g in ti.static(range(1, QUIET_GROUPS)):
+                group += ti.cast(key >= g * capacity, ti.i32)
+            at = starts[0]
+            for g in ti.static(range(1, QUIET_GROUPS)):
+                at = ti.select(group == g, starts[g], at)
+            S.nbr_new[i, at] = key - group * capacity
+            for g in ti.static(range(QUIET_GROUPS)):
+                starts[g] += ti.cast(group == g, ti.i32)
+        for g in ti.static(range(QUIET_GROUPS)):
+            S.nbr_gap[i, g] = gaps[g]
+            if ti.static(g < QUIET_GROUPS - 1):  # (the last group ends with the row)
+                S.nbr_end[i, g] = ends[g]
 
     @ti.func
     def match_row(i):

@@ -34,11 +34,11 @@ FORMAT = 3
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # Rewritten before use (the conduction flag by every force pass, the reactions' gas book by every reaction
 # step, `sums` by every energy sum and, in the gas, `sums` and the direct solve's band by every pressure
-# solve, the rest by every neighbour build): not kept. The quiet partners' gaps (nbr_touch, nbr_gap) are not kept either: a restored run
-# evaluates every listed pair until its next build, which gives the same bits (kernels/contact.py).
+# solve, the rest by every neighbour build): not kept. The quiet partners' groups (nbr_touch, nbr_end, nbr_gap) are not kept
+# either: a restored run evaluates every listed pair until its next build, which gives the same bits (kernels/pair_contact.py).
 TRANSIENT = ("conduct", "gas_book", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
              "cell_count", "cell_start", "cell_fill", "cell_block", "sort_tail", "pcell", "sorted_idx", "sums", "worst", "worst_at",
-             "nbr_touch",
+             "nbr_touch", "nbr_end",
              "nbr_gap", "band", "band_y")
 
 

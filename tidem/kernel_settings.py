@@ -24,6 +24,14 @@ def quiet_margin(model: Model) -> float:
     return QUIET_MARGIN * model.skin + 16 * rounding_unit(model)
 
 
+def quiet_bounds(model: Model) -> tuple[float, float]:
+    """The gaps [m] that group a row's quiet partners (`kernels/broadphase.py`, step 5): half the skin and
+    the skin. A contact pass reaches the first group as the grains spend the first half of the skin, the
+    second before the next build; the partners beyond, listed for the gas lens only, it evaluates only in
+    the steps with conduction (`kernels/pair_contact.py`)."""
+    return 0.5 * model.skin, model.skin
+
+
 def mesh_settings(model: Model) -> tuple[int, int, int, float, float] | None:
     """What the contact kernel needs of the mesh walls (`kernels/mesh_contact.py`): their number, the
     candidate triangles and contact slots per particle, the tolerance [m] within which a closest

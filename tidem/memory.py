@@ -83,8 +83,8 @@ def particle_field_bytes(feat, neighbors: int, wall_slots: int) -> int:
     """Bytes of the Taichi fields per particle (`tidem.state.State`) other than the neighbour
     and contact-history rows; `feat` has the attributes of `tidem.model.Features` used here."""
     fp = feat.float_bytes
-    # vectors x v w f tq x_build + scalars; ints (slab, slab_list, nbr_count, nbr_touch ...) and float32 nbr_gap
-    per = fp * (3 * 7 + 6) + 4 * 13
+    # vectors x v w f tq x_build + scalars; ints (slab, slab_list, nbr_count, nbr_touch, nbr_end ...) and float32 nbr_gap
+    per = fp * (3 * 7 + 6) + 4 * 17
     per += wall_slots * (4 + 3 * fp)
     if feat.rolling:
         per += 3 * fp * wall_slots

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
-from tidem.kernel_settings import mesh_settings, quiet_margin, static_surfaces
+from tidem.kernel_settings import mesh_settings, quiet_bounds, quiet_margin, static_surfaces
 from tidem.kernels.averaging import make_averaging_kernel
 from tidem.kernels.broadphase import make_neighbor_builder
 from tidem.kernels.contact_laws import LINEAR
@@ -125,7 +125,7 @@ class Solver(TallyReads):
             after = tuple(fn for fn in (forces.mark_near, forces.list_meshes) if fn is not None)
             rebuild, self._cell_order = make_neighbor_builder(
                 model.grid, model.max_neighbors, model.skin + model.heat_reach, f.rolling, f.hysteretic, S, f.growth,
-                after, model.uniform_particles())
+                after, model.uniform_particles(), bounds=quiet_bounds(model))
             self._rebuild = hot(rebuild)
         return forces
 

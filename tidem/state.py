@@ -18,9 +18,10 @@ Neighbour list, shape [capacity, K], stored slot-major (`_Placer.rows`), each pa
 row only (`kernels/broadphase.py`): nbr (partner), ft (tangential spring [m]), mr (rolling spring
 [N m]), dmax (maximum overlap [m]); nbr_new and src are scratch rows of the rebuild, nbr_count
 [capacity] its row lengths, nbr_touch [capacity] the number of partners that touched at the build
-(listed first), nbr_gap [capacity] the smallest gap to the others then [m] (float32; <= 0: none
-skipped), flip_ft, flip_mr, flip_dmax [capacity] its buffer of the history of pairs that changed owner
-(flips[None] entries). With numerics.precision = 'mixed' the float rows (ft, mr, dmax, flip_*) are
+(listed first), then the others in QUIET_GROUPS groups by their gap then: nbr_end [capacity,
+QUIET_GROUPS - 1] where each group but the last ends, nbr_gap [capacity, QUIET_GROUPS] its smallest
+gap [m] (float32; 1e30: an empty group; <= 0: none skipped), flip_ft, flip_mr, flip_dmax
+[capacity] its buffer of the history of pairs that changed owner (flips[None] entries). With numerics.precision = 'mixed' the float rows (ft, mr, dmax, flip_*) are
 float32, every other field float64.
 Slabs (`kernels/geometry.py`, `slab_layout`): slab [capacity] (a particle's slab at the last
 build), slab_list (the particles of slab s, in index order, at slab_start[s] ..
@@ -64,7 +65,7 @@ import taichi as ti
 
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.averaging import channels
-from tidem.kernels.broadphase import scan_blocks
+from tidem.kernels.broadphase import QUIET_GROUPS, scan_blocks
 from tidem.kernels.geometry import slab_layout
 from tidem.mesh_bins import MESH_SLOTS
 from tidem.model import Model
@@ -143,8 +144,11 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
         p.per_particle((N,), name, ti.i32)
     for name in ("slab", "slab_list", "nbr_count"):  # rewritten by each neighbour build
         p.place((N,), name, ti.i32)
-    # side by side: the contact passes read both for each particle (kernels/contact.py, quiet partners)
-    p.fb.dense(ti.i, N).place(p.make("nbr_touch", ti.i32), p.make("nbr_gap", ti.f32))
+    # side by side: the contact passes read a row's quiet groups together (kernels/pair_contact.py)
+    row = p.fb.dense(ti.i, N)
+    row.place(p.make("nbr_touch", ti.i32))
+    row.dense(ti.j, QUIET_GROUPS - 1).place(p.make("nbr_end", ti.i32))
+    row.dense(ti.j, QUIET_GROUPS).place(p.make("nbr_gap", ti.f32))
     n_slabs = slab_layout(model.grid)[1]
     p.place((n_slabs + 1,), "slab_start", ti.i32)
     p.place((n_slabs,), "slab_fill", ti.i32)

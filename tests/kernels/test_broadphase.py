@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
+from tidem.kernel_settings import quiet_bounds
 from tidem.kernels.geometry import slab_axis_for, slab_layout
 
 
@@ -44,13 +45,16 @@ def unordered(pairs):
     return {(min(i, j), max(i, j)) for i, j in pairs}
 
 
-def touching_first(S, n, lengths, periodic):
-    """Assert that each row lists the partners that touch first, each group by partner index, that
-    nbr_touch counts them and that nbr_gap is the smallest gap to the others (float32); returns the
-    number of touching pairs."""
+def touching_first(solver, n, lengths, periodic):
+    """Assert that each row lists the partners that touch first, then the others in their groups by gap
+    (`quiet_bounds`), each group by partner index; that nbr_touch counts those that touch, nbr_end
+    holds where each quiet group but the last ends and nbr_gap each group's smallest gap (float32; an
+    empty group's 1e30); returns the number of touching pairs."""
+    S = solver.state
+    bounds = quiet_bounds(solver.model)
     x, r = S.x.to_numpy(), S.radius.to_numpy()
     nbr, cnt = S.nbr.to_numpy(), S.nbr_n.to_numpy()
-    n_touch, gap = S.nbr_touch.to_numpy(), S.nbr_gap.to_numpy()
+    n_touch, end, gap = S.nbr_touch.to_numpy(), S.nbr_end.to_numpy(), S.nbr_gap.to_numpy()
     touching = 0
     for i in range(n):
         row = nbr[i, :cnt[i]]
@@ -59,11 +63,17 @@ def touching_first(S, n, lengths, periodic):
             if periodic[a]:
                 d[:, a] -= lengths[a] * np.round(d[:, a] / lengths[a])
         gaps = np.linalg.norm(d, axis=1) - r[row] - r[i]
-        apart = gaps >= 0.0
-        assert np.array_equal(row, row[np.lexsort((row, apart))]), f"row {i}: {row}, apart {apart}"
-        assert n_touch[i] == (~apart).sum(), f"row {i}"
-        assert gap[i] == pytest.approx(gaps[apart].min(), rel=1e-6) if apart.any() else gap[i] > 1e29, f"row {i}"
-        touching += int((~apart).sum())
+        group = (gaps >= 0.0) + sum(gaps >= b for b in bounds)  # 0: touching, 1 + the quiet group
+        assert np.array_equal(row, row[np.lexsort((row, group))]), f"row {i}: {row}, groups {group}"
+        assert n_touch[i] == (group == 0).sum(), f"row {i}"
+        for g in range(len(bounds) + 1):
+            members = group == g + 1
+            if g < len(bounds):
+                assert end[i, g] == (group <= g + 1).sum(), f"row {i}, group {g}"
+            expected = gaps[members].min() if members.any() else None
+            assert gap[i, g] == pytest.approx(expected, rel=1e-6) if expected is not None else gap[i, g] > 1e29, \
+                f"row {i}, group {g}"
+        touching += int((group == 0).sum())
     return touching
 
 
@@ -101,7 +111,7 @@ def test_neighbour_list_matches_brute_force(solver_for, periodic, hi, n):
     assert len(expected) > n, "the test must have many pairs"
     listed = listed_pairs(S, n)
     assert len(listed) == len(expected) // 2 and unordered(listed) == unordered(expected), "each pair once"
-    touching_first(S, n, lengths, per)  # (none touch here: by partner index)
+    assert touching_first(s, n, lengths, per) == 0  # (none touch here: the quiet groups by partner index)
     # the owner: the particle in the slab before the partner's, or in one slab the lower scene index
     axis, count = slab_layout(s.model.grid)
     assert count == s.model.grid.cells[axis] and (count <= 2 or count % 2 == 0), "slabs: an even count of cell layers"
@@ -162,7 +172,7 @@ def test_history_follows_partner_across_rebuild(solver_for):
         assert len(before & after) > 100 and len(after - before) > 100 and len(before - after) > 100
         flipped = {(i, j) for i, j in after if (j, i) in before}
         assert len(flipped) > 20, "particles crossed into other slabs: pairs changed owner"
-        assert touching_first(S, n, [0.0192] * 3, [True] * 3) > 100, "many pairs must touch"
+        assert touching_first(s, n, [0.0192] * 3, [True] * 3) > 100, "many pairs must touch"
         ft, mr, dmax = S.ft.to_numpy(), S.mr.to_numpy(), S.dmax.to_numpy()
         nbr, cnt, touch = S.nbr.to_numpy(), S.nbr_n.to_numpy(), S.nbr_touch.to_numpy()
         assert (cnt - touch).sum() > 100, "many listed pairs must be apart"
