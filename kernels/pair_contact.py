@@ -12,8 +12,8 @@ smallest gap (`nbr_end`, `nbr_gap`; the build zeroed their history, `kernels/bro
 then no two particles have come closer than twice the largest displacement, 2 sqrt(S.max_disp), so
 while that (plus a rounding margin, `quiet_margin`: the `reach`) stays below a group's smallest gap,
 none of its partners touches: the pass evaluates the row up to the end of the last group whose
-smallest gap is within reach. A pair apart adds nothing and its history stays zero, so this changes
-no bit; it saves the distance, the branch and the history store of each partner apart (a settled
+smallest gap is within reach. A pair apart adds nothing and its history stays zero, so skipping it
+changes no bit; it saves the distance, the branch and the history store of each partner apart (a settled
 bed: 1.3 of 3.7 listed pairs a particle; a bubbling bed: 3.39 of 4.12 quiet partners evaluated with
 one group, 1.96 with three, `benchmarks/README.md`). With the gas lens (`fluid_layer`) pairs apart
 conduct, so in the steps with conduction every partner is evaluated.
