@@ -8,14 +8,17 @@ RUN_DIR holds a checkpoint.npz of SCENE (e.g. `tidem scene fluidized_tube --t-en
 --no-render`); `peer:N` is instead the N-particle peer benchmark bed of `tidem bench` (float64,
 from rest). Runs 50 warm-up steps (300 for the peer bed), then STEPS (default 1000) with THREADS
 (default 2) CPU threads, and prints the kernels by total time (the counts include the warm-up;
-the profiler adds a little time to each launch).
+the profiler adds a little time to each launch), then the median and 10th percentile of a launch of
+the costliest ones.
 """
 
 import sys
 from pathlib import Path
 
+import numpy as np
 import taichi as ti
 import typer
+from taichi.lang import impl
 
 from tidem import runtime
 from tidem.bench import bench_scene, profile_scene, tiled_bed
@@ -46,6 +49,18 @@ def main(scene: str, run_dir: str, steps: int = 1000, threads: int = 2, sets: li
     print(f"{result['scene']}: {result['particles']} particles, {steps} steps, {threads} threads, "
           f"{result['particle_steps_per_s']:.3g} particle-steps/s")
     ti.profiler.print_kernel_profiler_info("count")
+    print_quantiles()
+
+
+def print_quantiles(top: int = 8) -> None:
+    """Median and 10th percentile of each launch's time for the kernels of most total time: on a noisy VM
+    a moment's slowing shifts the mean, much less these."""
+    times: dict[str, list[float]] = {}
+    for record in impl.get_runtime().prog.get_kernel_profiler_records():
+        times.setdefault(record.name, []).append(record.kernel_time)
+    print("kernel (launches): median, 10th percentile of a launch [ms]")
+    for name, t in sorted(times.items(), key=lambda item: -sum(item[1]))[:top]:
+        print(f"  {name} ({len(t)}): {np.median(t):.3f}, {np.percentile(t, 10):.3f}")
 
 
 if __name__ == "__main__":
