@@ -16,14 +16,14 @@ Algorithm (O(N) per rebuild):
    successor), in the row of the lower `ident` (the particle's scene index, which a storage
    re-sort does not change); the contact pass (`kernels/contact.py`) evaluates it there and adds
    the reaction to the partner, which lies in the owner's slab or the next one;
-3. sort the row in the scratch rows `nbr_new`: the partners that touch i first, then the others in
-   their groups (step 5), each group by partner index (so the result does not depend on thread
-   timing). The contact pass's branch on contact then turns once in a row instead of at random: 9-12 %
-   of the pass on the peer bed (`benchmarks/README.md`). Find each partner that touches i in the old row (`src[i,
-   k]`: the old slot, -1 for a new pair and for a partner apart, whose history is zero); a pair
-   listed before in the partner's row (its owner changed: one of the two crossed into another slab)
-   takes its history from there, seen from the new owner's side (springs change sign), through a
-   buffer (`flip_*`, `src` = -2 - entry);
+3. sort the row in the scratch rows `nbr_new`: the partners that touch i first, then the others
+   (which step 5 puts in their groups), each by partner index (so the result does not depend on
+   thread timing). The contact pass's branch on contact then turns once in a row instead of at
+   random: 9-12 % of the pass on the peer bed (`benchmarks/README.md`). Find each partner that touches
+   i in the old row (`src[i, k]`: the old slot, -1 for a new pair and for a partner apart, whose
+   history is zero); a pair listed before in the partner's row (its owner changed: one of the two
+   crossed into another slab) takes its history from there, seen from the new owner's side (springs
+   change sign), through a buffer (`flip_*`, `src` = -2 - entry);
 4. carry the history within the row, in place (`move_rows`);
 5. note how many partners touch i (`nbr_touch`, listed first). The others, whose history is zeroed,
    follow in QUIET_GROUPS groups by their gap (below `bounds[0]`, up to `bounds[1]`, ..., beyond: with
@@ -279,7 +279,7 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
             group = 0
             for b in ti.static(bounds):
                 group += ti.cast(gap >= b, ti.i32)
-            for g in ti.static(range(QUIET_GROUPS)):  # (selects: the groups follow no pattern a branch could learn)
+            for g in ti.static(range(QUIET_GROUPS)):  # (selects: the groups follow no pattern to predict)
                 gaps[g] = ti.select(group == g, ti.min(gaps[g], gap), gaps[g])
                 ends[g] += ti.cast(group <= g, ti.i32)
             S.src[i, a] = j + group * capacity
