@@ -25,15 +25,12 @@ from tidem import checkpoint, runtime
 from tidem.cli_common import build_or_exit, load_scene
 from tidem.kernel_settings import quiet_bounds
 from tidem.launch import load_checkpoint
+from tidem.overlaps import min_image
 from tidem.solver import Solver
 
 
 def displacements(S, n, x0, lengths, periodic):
-    d = S.x.to_numpy()[:n] - x0
-    for a in range(3):
-        if periodic[a]:
-            d[:, a] -= lengths[a] * np.round(d[:, a] / lengths[a])
-    return d
+    return min_image(S.x.to_numpy()[:n] - x0, lengths, periodic)
 
 
 def rows(solver, steps, lengths, periodic):
@@ -48,11 +45,7 @@ def rows(solver, steps, lengths, periodic):
         x, r = S.x_build.to_numpy()[:n], S.radius.to_numpy()[:n]
         i, k = np.nonzero((slot >= touch[:, None]) & (slot < cnt[:, None]))
         j = nbr[i, k]
-        sep = x[j] - x[i]
-        for a in range(3):
-            if periodic[a]:
-                sep[:, a] -= lengths[a] * np.round(sep[:, a] / lengths[a])
-        gap = np.linalg.norm(sep, axis=1) - r[i] - r[j]  # at the build
+        gap = np.linalg.norm(min_image(x[j] - x[i], lengths, periodic), axis=1) - r[i] - r[j]  # at the build
         reach = 2 * d.max()
         row_min = np.full(n, np.inf)
         np.minimum.at(row_min, i, gap)

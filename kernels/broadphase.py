@@ -20,11 +20,9 @@ Algorithm (O(N) per rebuild):
    (which step 5 puts in their groups), each by partner index (so the result does not depend on
    thread timing). The contact pass's branch on contact then turns once in a row instead of at
    random: 9-12 % of the pass on the peer bed (`benchmarks/README.md`). Find each partner that touches
-   i in the old row (`src[i, k]`: the old slot, -1 for a new pair and for a partner apart, whose
-   history is zero); a pair listed before in the partner's row (its owner changed: one of the two
-   crossed into another slab) takes its history from there, seen from the new owner's side (springs
-   change sign), through a buffer (`flip_*`, `src` = -2 - entry);
-4. carry the history within the row, in place (`move_rows`);
+   i in the old row, or in the partner's old row where the pair changed owner (`src`, through the flip
+   buffer `flip_*`; `kernels/history_carry.py`, `match_row`);
+4. carry the history within the row, in place (`history_carry.move_row`);
 5. note how many partners touch i (`nbr_touch`, listed first). The others, whose history is zeroed,
    follow in QUIET_GROUPS groups by their gap (below `bounds[0]`, up to `bounds[1]`, ..., beyond: with
    the run's bounds half the contact skin, the skin, and the partners listed for the gas lens alone),
@@ -44,6 +42,7 @@ error that names the setting to raise (never a silent drop).
 import taichi as ti
 
 from .geometry import make_geometry, make_slabs
+from .history_carry import make_history_carry
 from .ordered import in_order
 from .sizes import make_sizes
 
@@ -101,9 +100,8 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     layers = n_slabs >= (3 if per[axis] else 2)
     if layers:
         span[axis] = (0, 2)
-    zero3 = ti.Vector([0.0, 0.0, 0.0])
+    match_row, move_row = make_history_carry(S, K, rolling, hysteretic)
     capacity = S.x.shape[0]
-    MOVED = K  # a `src` no slot has: the slot holds its new history (move_rows)
     QUIET = 1e30  # nbr_gap of an empty quiet group
 
     @ti.func
@@ -283,10 +281,9 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 gaps[g] = ti.select(group == g, ti.min(gaps[g], gap), gaps[g])
                 ends[g] += ti.cast(group <= g, ti.i32)
             S.src[i, a] = j + group * capacity
-        starts = ends
+        starts = ti.Vector([touching] * QUIET_GROUPS)  # where each group begins
         for g in ti.static(range(1, QUIET_GROUPS)):
             starts[g] = ends[g - 1]
-        starts[0] = touching
         for a in range(touching, count):
             key = S.src[i, a]
             group = 0
@@ -304,113 +301,12 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
                 S.nbr_end[i, g] = ends[g]
 
     @ti.func
-    def match_row(i):
-        """src[i, k]: the new entry's slot in i's old row, -2 - its entry in the flip buffer when the
-        partner's old row held the pair, -1 for a new pair (step 3) and for a partner apart, whose history
-        is zero (step 5): only the partners that touch are looked up. Reads the old rows only, so it runs
-        in the loop that builds the new rows, row by row."""
-        n_old = S.nbr_n[i]
-        count = S.nbr_count[i]
-        touching = ti.min(S.nbr_touch[i], count)  # (an inactive particle's nbr_touch is stale, its count 0)
-        for k in range(touching, count):
-            S.src[i, k] = -1
-        for k in range(touching):
-            j = S.nbr_new[i, k]
-            found = -1
-            for a in range(n_old):
-                if S.nbr[i, a] == j:
-                    found = a
-                    break
-            if found < 0:
-                for m in range(S.nbr_n[j]):
-                    if S.nbr[j, m] == i:  # the pair changed owner: its history, seen from i
-                        b = ti.atomic_add(S.flips[None], 1)
-                        if b < S.flip_ft.shape[0]:
-                            S.flip_ft[b] = -S.ft[j, m]
-                            if ti.static(rolling):
-                                S.flip_mr[b] = -S.mr[j, m]
-                            if ti.static(hysteretic):
-                                S.flip_dmax[b] = S.dmax[j, m]
-                            found = -2 - b
-                        else:
-                            ti.atomic_add(S.overflow[2], 1)
-            S.src[i, k] = found
-
-    @ti.func
-    def history(i, k):
-        """The history in slot k of i's row: tangential spring, rolling spring, largest overlap."""
-        mr = zero3
-        dmax = 0.0
-        if ti.static(rolling):
-            mr = S.mr[i, k]
-        if ti.static(hysteretic):
-            dmax = S.dmax[i, k]
-        return S.ft[i, k], mr, dmax
-
-    @ti.func
-    def set_history(i, k, ft, mr, dmax):
-        S.ft[i, k] = ft
-        if ti.static(rolling):
-            S.mr[i, k] = mr
-        if ti.static(hysteretic):
-            S.dmax[i, k] = dmax
-
-    @ti.func
-    def take_history(i, k, src):
-        """Slot k of i's row takes its history from `src` (module docstring, step 3)."""
-        if src >= 0:
-            ft, mr, dmax = history(i, src)
-            set_history(i, k, ft, mr, dmax)
-        elif src == -1:
-            set_history(i, k, zero3, zero3, 0.0)
-        else:
-            b = -2 - src
-            mr = zero3
-            dmax = 0.0
-            if ti.static(rolling):
-                mr = S.flip_mr[b]
-            if ti.static(hysteretic):
-                dmax = S.flip_dmax[b]
-            set_history(i, k, S.flip_ft[b], mr, dmax)
-
-    @ti.func
     def move_rows(n):
-        """Step 4: each row takes its new partners and their history, in place (writes its own row only).
-        The old partners are matched by now, so the row `nbr` first notes which new slot takes the
-        history of each old slot (-1: none). A slot whose history no one takes is filled first, then
-        the slot it took from, and so on along the chain; the slots left form cycles, each filled
-        around from one saved history. `src` = MOVED marks a filled slot."""
+        """Step 4 (`kernels/history_carry.py`), then the `after` funcs: each particle's own work after a
+        build, in the same loop."""
         for i in range(n):
-            count = S.nbr_count[i]
-            for a in range(ti.max(count, S.nbr_n[i])):
-                S.nbr[i, a] = -1
-            for k in range(count):
-                if S.src[i, k] >= 0:
-                    S.nbr[i, S.src[i, k]] = k
-            for p in range(count):
-                if S.nbr[i, p] < 0:
-                    k = p
-                    while k < count:
-                        src = S.src[i, k]
-                        S.src[i, k] = MOVED
-                        take_history(i, k, src)
-                        k = src if src >= 0 else count
-            for p in range(count):
-                if S.src[i, p] != MOVED and S.src[i, p] != p:  # (a slot that keeps its history is left alone)
-                    ft, mr, dmax = history(i, p)
-                    k = p
-                    while S.src[i, k] != MOVED:
-                        src = S.src[i, k]
-                        S.src[i, k] = MOVED
-                        if src == p:
-                            set_history(i, k, ft, mr, dmax)
-                        else:
-                            take_history(i, k, src)
-                            k = src
-            for k in range(count):
-                S.nbr[i, k] = S.nbr_new[i, k]
-            S.nbr_n[i] = count
-            for then in ti.static(after):  # each particle's own work after a build, in the same loop
+            move_row(i)
+            for then in ti.static(after):
                 then(i)
 
     @ti.kernel

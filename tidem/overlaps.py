@@ -58,7 +58,7 @@ def overlapping_pairs(x: np.ndarray, radius: np.ndarray, lo, lengths, periodic,
     return i, j, _depth(x, radius, i, j, lengths, periodic) / np.minimum(radius[i], radius[j])
 
 
-def _min_image(d: np.ndarray, lengths, periodic) -> np.ndarray:
+def min_image(d: np.ndarray, lengths, periodic) -> np.ndarray:
     """Separations d [n, 3] with each periodic component wrapped to the nearest image (in place)."""
     for a in range(3):
         if periodic[a]:
@@ -68,7 +68,7 @@ def _min_image(d: np.ndarray, lengths, periodic) -> np.ndarray:
 
 def _depth(x, radius, i, j, lengths, periodic) -> np.ndarray:
     """Overlap depth r_i + r_j - |x_j - x_i| of pairs (minimum image on periodic axes) [m]."""
-    return radius[i] + radius[j] - np.linalg.norm(_min_image(x[j] - x[i], lengths, periodic), axis=1)
+    return radius[i] + radius[j] - np.linalg.norm(min_image(x[j] - x[i], lengths, periodic), axis=1)
 
 
 def surface_overlaps(x: np.ndarray, radius: np.ndarray, planes: list[dict], tubes: list[dict], lengths,
@@ -79,7 +79,7 @@ def surface_overlaps(x: np.ndarray, radius: np.ndarray, planes: list[dict], tube
     names = [p["name"] for p in planes] + [t["name"] for t in tubes]
     gaps = [(x - np.asarray(p["p0"])) @ np.asarray(p["n"]) for p in planes]
     for t in tubes:
-        d = _min_image(x - np.asarray(t["c"]), lengths, periodic)
+        d = min_image(x - np.asarray(t["c"]), lengths, periodic)
         gaps.append(np.linalg.norm(d * np.asarray(t["mask"]), axis=1) - t["r"])
     for s, gap in enumerate(gaps):
         ratio = (radius - gap) / radius
