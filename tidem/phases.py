@@ -13,6 +13,13 @@ so that each phase is booked where its work is done rather than where the host n
 (the largest-displacement read of every step, which otherwise books the previous step's
 forces under "kick-drift"). Output waits for the device before it starts and books only its
 own time.
+
+The sampled steps must not keep step with the phases that come every few steps (the gas every
+`gas.coupling_interval`, conduction every `heat.conduction_interval`): every 16th step sampled
+the gas steps of a 20-step coupling 4x as often as they come (the multiples of 80), and the
+GPU run's profile booked the gas at twice its time (benchmarks/README.md, 2026-11-28). A step is
+sampled where the fractional part of step x (sqrt(5) - 1)/2 falls below 1/SAMPLE_EVERY (a Weyl
+sequence): one step in SAMPLE_EVERY, and the same share of the multiples of any interval.
 """
 
 from __future__ import annotations
@@ -37,6 +44,14 @@ clock = time.perf_counter
 
 
 SAMPLE_EVERY = 16  # a GPU run's sampled steps: the waits (~20 us each) cost under 1 % of a step
+GOLDEN = (5.0 ** 0.5 - 1.0) / 2.0
+
+
+def sampled_step(step: int, every: int) -> bool:
+    """Whether step number `step` is one of a sampled profile's steps, one in `every` (module
+    docstring: the fractional part of step x GOLDEN below 1/every, evenly spread over the
+    multiples of every interval)."""
+    return (step * GOLDEN) % 1.0 < 1.0 / every
 STEP_PHASES = tuple(p for p in PHASES if p != "output")
 
 
@@ -59,7 +74,7 @@ class PhaseTimer:
     def begin_step(self, step: int) -> float:
         """The start of step number `step`: a sampled one first waits for the work in flight (booked
         with the steps' phases); returns the step's start."""
-        self._sampling = bool(self.sample_every) and step % self.sample_every == 0
+        self._sampling = bool(self.sample_every) and sampled_step(step, self.sample_every)
         if self._sampling:
             self.sampled_steps += 1
             return self._settle()
