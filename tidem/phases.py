@@ -44,6 +44,7 @@ clock = time.perf_counter
 
 
 SAMPLE_EVERY = 16  # a GPU run's sampled steps: the waits (~20 us each) cost under 1 % of a step
+STEP_PHASES = tuple(p for p in PHASES if p != "output")
 GOLDEN = (5.0 ** 0.5 - 1.0) / 2.0
 
 
@@ -52,7 +53,6 @@ def sampled_step(step: int, every: int) -> bool:
     docstring: the fractional part of step x GOLDEN below 1/every, evenly spread over the
     multiples of every interval)."""
     return (step * GOLDEN) % 1.0 < 1.0 / every
-STEP_PHASES = tuple(p for p in PHASES if p != "output")
 
 
 class PhaseTimer:

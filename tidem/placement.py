@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tidem.mesh_geometry import inside_mesh, point_mesh_distance
+from tidem.overlaps import min_image
 from tidem.scene.sizes import largest_parcel, parcel_count
 
 MAX_MESH_MESSAGES = 6  # given positions inside a mesh reported one by one, per group
@@ -88,11 +89,7 @@ def clear_of_obstacles(sites: np.ndarray, radius: float, planes, tubes, lengths,
     for p0, n in planes:
         ok &= (sites - np.asarray(p0)) @ np.asarray(n) > radius * (1 - 1e-9)
     for centre, axis_mask, r_tube in tubes:
-        d = sites - np.asarray(centre)
-        for a in range(3):
-            if periodic[a]:
-                d[:, a] -= lengths[a] * np.round(d[:, a] / lengths[a])
-        d *= np.asarray(axis_mask)
+        d = min_image(sites - np.asarray(centre), lengths, periodic) * np.asarray(axis_mask)
         ok &= np.linalg.norm(d, axis=1) > (r_tube + radius) * (1 - 1e-9)
     return ok
 
