@@ -25,7 +25,8 @@ about once per step, which is what the large beds, whose fields do not fit in ca
 `atomic` (a GPU, where a slab per thread would leave it idle) every particle of a pass is a thread
 of its own and the sums are atomic: the same forces, summed in an order that varies from run to run.
 With heat the same evaluation adds the conduction (contact spot and gas lens) to the particles'
-heat flows and to the heated surfaces' (`surf_rate`, atomic: a few sums all threads share).
+heat flows and to the heated surfaces' (`surf_rate`: on the CPU in rows of each block, added up in block
+order after the passes, `kernels/surface_contact.py`; atomic on a GPU).
 
 Mesh walls (`mesh_pass`): before the passes, a parallel loop of its own adds the mesh contacts of the
 particles that list a triangle (a few: those at the apparatus' walls) to their sums, and clears the
@@ -135,7 +136,8 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     pair = make_pair_contacts(S, respond, hysteretic, rolling, p_one, heat, fluid_layer, pairs and quiet_margin > 0.0,
                               grain_scale, min_image, radius_of, mass_of, add, raise_to) if pairs else None
     surf = make_surface_contacts(S, planes, tubes, W, respond, hysteretic, rolling, s_one, heat, fluid_layer, angle_bins,
-                                 radiation, foil, wall_foil, cull, surface_reach, grain_scale, min_image, radius_of)
+                                 radiation, foil, wall_foil, cull, surface_reach, grain_scale, min_image, radius_of,
+                                 0 if flat else n_blocks)
     n_surf = surf.n_surf
     n_meshes = meshes[0] if meshes else 0
     mesh = None
@@ -161,9 +163,10 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         S.ncontact[i] = 0
 
     @ti.func
-    def visit(i, t, dt, conduct, diag, reach):
+    def visit(i, t, dt, conduct, diag, reach, blk):
         """Particle i's pairs (adding the reactions to the partners), walls, tubes and meshes, and
-        gravity; its quiet partners only where their gap at the build is within `reach` (`quiet_reach`)."""
+        gravity; its quiet partners only where their gap at the build is within `reach` (`quiet_reach`);
+        its surfaces' heat flows booked in block blk's rows (slab passes; `kernels/surface_contact.py`)."""
         xi = S.x[i]
         ri = radius_of(i)
         mi = mass_of(i)
@@ -179,7 +182,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             force, torque, heat_in, worst, touching = pair.visit(i, xi, vi, wi, ri, mi, mat_i, dt, conduct, diag, reach,
                                                                  force, torque, heat_in, worst, touching)
         force, torque, heat_in, worst, touching = surf.visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag,
-                                                             force, torque, heat_in, worst, touching)
+                                                             force, torque, heat_in, worst, touching, blk)
         add(S.f, i, force)
         add(S.tq, i, torque)
         if ti.static(heat):
@@ -228,9 +231,9 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
             clear(S.slab_list[p])
 
     @ti.func
-    def sweep_slab(s, t, dt, conduct, diag, reach):
+    def sweep_slab(s, t, dt, conduct, diag, reach, blk):
         for p in range(S.slab_start[s], S.slab_start[s + 1]):
-            visit(S.slab_list[p], t, dt, conduct, diag, reach)
+            visit(S.slab_list[p], t, dt, conduct, diag, reach, blk)
 
     @ti.func
     def start_pass(conduct):
@@ -246,6 +249,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                     ti.loop_config(serialize=True)
                     for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                         S.tube_bin_rate[k, b] = 0.0
+                surf.clear_blocks()
 
     def passes(then=None):
         """Both passes (module docstring) as a Taichi func passes(n, t, dt, conduct, diag, drift, kick)
@@ -285,7 +289,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                                 clear(i)
                 for i in range(n):
                     if S.active[i]:
-                        visit(i, t, dt, conduct, diag, reach)
+                        visit(i, t, dt, conduct, diag, reach, 0)
                 if ti.static(kicks):
                     for i in range(n):
                         if S.active[i]:
@@ -306,7 +310,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                                     for s in range(lo, hi):
                                         clear_slab(s)
                             for s in range(lo, hi - 1):
-                                sweep_slab(s, t, dt, conduct, diag, reach)
+                                sweep_slab(s, t, dt, conduct, diag, reach, b)
                                 if ti.static(kicks):
                                     if s > lo or pred(s) < 0:  # complete: its predecessor is swept
                                         largest = ti.max(largest, integrate_slab(s, t, dt, drift, kick))
@@ -318,7 +322,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                             if b >= n_blocks:
                                 break
                             last = block_start(b + 1) - 1
-                            sweep_slab(last, t, dt, conduct, diag, reach)
+                            sweep_slab(last, t, dt, conduct, diag, reach, b)
                             if ti.static(kicks):
                                 largest = ti.max(largest, integrate_slab(last, t, dt, drift, kick))
                                 after = succ(last)  # the next block's first slab
@@ -326,6 +330,9 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
                                     largest = ti.max(largest, integrate_slab(after, t, dt, drift, kick))
                         if ti.static(kicks):
                             ti.atomic_max(S.max_disp[None], largest)
+                if ti.static(heat):
+                    if conduct:
+                        surf.sum_blocks()
 
         return both
 

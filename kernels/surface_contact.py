@@ -16,6 +16,11 @@ With heat, a surface with a temperature conducts to a touching particle by the w
 touch it by the lens; the heat flow is booked per surface in surf_rate and, around a tube, per angle
 bin of the contact point (omega = atan2(side, up), 0 = top, 180 deg = bottom) in tube_bin_rate; a
 heated foil's own temperature (per angle bin of a tube, one per wall) takes the place of a fixed one.
+With `blocks` (the CPU's slab passes, `kernels/contact.py`) each block of slabs books its particles'
+flows in rows of its own (surf_rate_block, tube_bin_block: one thread a block, each in the block's
+particle order) and the pass adds the blocks up in block order (`sum_blocks`): the same sums on any
+thread count, so a heated foil, whose temperature follows them, keeps float64 runs bit-reproducible.
+Without (a GPU), the flows are atomic adds to surf_rate and tube_bin_rate.
 """
 
 from types import SimpleNamespace
@@ -27,10 +32,13 @@ from .heat import pfp_conductance, wall_conductance, wall_radiation
 
 def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, respond, hysteretic: bool, rolling: bool,
                           s_one, heat: bool, fluid_layer: float, angle_bins: int, radiation: bool, foil: bool,
-                          wall_foil: bool, cull: int, surface_reach: float, grain_scale: float, min_image, radius_of):
+                          wall_foil: bool, cull: int, surface_reach: float, grain_scale: float, min_image, radius_of,
+                          blocks: int = 0):
     """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
-    torque, heat_in, worst, touching)`, which adds particle i's contacts with every plane and tube to
-    the sums it is handed and returns them; `mark_near(i)` (None without `cull`). `respond`: the contact
+    torque, heat_in, worst, touching, blk)`, which adds particle i's contacts with every plane and tube to
+    the sums it is handed and returns them, booking its heat flows in block blk's rows where `blocks` (the
+    number of blocks) is given; `sum_blocks()`, which adds those rows up into surf_rate and tube_bin_rate;
+    `mark_near(i)` (None without `cull`). `respond`: the contact
     law (`contact_laws.make_contact_response`); `s_one`: each surface's material-surface parameter
     vector where all particles are of one material (constants of the kernel), else None (S.ps);
     `min_image`, `radius_of`: `kernels/geometry.py`, `kernels/sizes.py`."""
@@ -123,15 +131,50 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
         return t_wall
 
     @ti.func
-    def surface_heat(s: ti.template(), b, flow):
-        """Book a particle's heat flow from surface s, and from a tube by angle bin b of the contact point."""
-        ti.atomic_add(S.surf_rate[s], flow)
-        if ti.static(angle_bins > 0 and s >= n_planes):
-            ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
-
+    def surface_heat(s: ti.template(), b, flow, blk):
+        """Book a particle's heat flow from surface s, and from a tube by angle bin b of the contact point:
+        in block blk's rows with `blocks` (a plain add: one thread a block), else atomically."""
+        if ti.static(blocks):
+            S.surf_rate_block[blk, s] += flow
+            if ti.static(angle_bins > 0 and s >= n_planes):
+                S.tube_bin_block[blk, (s - n_planes) * angle_bins + b] += flow
+        else:
+            ti.atomic_add(S.surf_rate[s], flow)
+            if ti.static(angle_bins > 0 and s >= n_planes):
+                ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.func
-    def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching):
+    def clear_blocks():
+        """Zero the blocks' rows before a pass that conducts (serial: a few hundred items)."""
+        if ti.static(heat and blocks):
+            ti.loop_config(serialize=True)
+            for blk, s in ti.ndrange(blocks, n_surf):
+                S.surf_rate_block[blk, s] = 0.0
+            if ti.static(angle_bins > 0):
+                ti.loop_config(serialize=True)
+                for blk, kb in ti.ndrange(blocks, len(tubes) * angle_bins):
+                    S.tube_bin_block[blk, kb] = 0.0
+
+    @ti.func
+    def sum_blocks():
+        """surf_rate and tube_bin_rate of the planes and tubes: the blocks' rows added up in block order."""
+        if ti.static(heat and blocks):
+            ti.loop_config(serialize=True)
+            for s in range(n_surf):
+                total = 0.0
+                for blk in range(blocks):
+                    total += S.surf_rate_block[blk, s]
+                S.surf_rate[s] = total
+            if ti.static(angle_bins > 0):
+                ti.loop_config(serialize=True)
+                for k, b in ti.ndrange(len(tubes), angle_bins):
+                    total = 0.0
+                    for blk in range(blocks):
+                        total += S.tube_bin_block[blk, k * angle_bins + b]
+                    S.tube_bin_rate[k, b] = total
+
+    @ti.func
+    def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching, blk):
         """Particle i's contacts with the planes and tubes, added to the sums handed in (module docstring)."""
         held = S.wmask[i]  # bit s set: surface s has a history slot
         nearby = S.near[i] if ti.static(cull) else 0
@@ -182,7 +225,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                                 if ti.static(radiation):
                                     flow += wall_radiation(surface_params(mat_i, s), ri, t_wall, S.T[i])
                                 heat_in += flow
-                                surface_heat(s, b, flow)
+                                surface_heat(s, b, flow, blk)
                         if ti.static(rolling):
                             S.wmr[i, slot] = mr_new
                         if ti.static(hysteretic):
@@ -200,7 +243,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                             flow = cg * lens(surface_params(mat_i, s), ri, -delta, fluid_layer * ri) * (
                                 wall_temperature(s, b) - S.T[i])
                             heat_in += flow
-                            surface_heat(s, b, flow)
+                            surface_heat(s, b, flow, blk)
         S.wmask[i] = held
         return force, torque, heat_in, worst, touching
 
@@ -217,4 +260,5 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                         bits |= 1 << s
             S.near[i] = bits
 
-    return SimpleNamespace(visit=visit, mark_near=mark_near_surfaces if cull else None, n_surf=n_surf)
+    return SimpleNamespace(visit=visit, mark_near=mark_near_surfaces if cull else None, n_surf=n_surf,
+                           clear_blocks=clear_blocks, sum_blocks=sum_blocks)

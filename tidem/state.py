@@ -32,11 +32,12 @@ worst, worst_at: the health check's largest overlap ratio and its particle, and 
 non-finite position (`kernels/diagnostics.py`).
 With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/J]); per
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
-into the bed [W]) and surf_energy (its time integral [J]); with angle bins around heated tubes
-tube_bin_rate / tube_bin_energy (the same by angle bin) and tube_side (the horizontal unit
-vector across each tube); with heated-foil tubes tube_foil (heating per area [W/m^2], foil
-heat capacity per area [J/(m^2 K)], bin area [m^2], G / ds^2 [W/(m^2 K)]; zeros for other
-tubes), tube_bin_T (foil temperature by angle bin [K]), tube_bin_dT (its change in the step)
+into the bed [W]) and surf_energy (its time integral [J]), surf_rate_block [BLOCKS, surfaces] (each
+block of slabs' share of surf_rate on the CPU); with angle bins around heated tubes tube_bin_rate /
+tube_bin_energy (the same by angle bin), tube_bin_block (each block's share, [BLOCKS, tube x bins + bin])
+and tube_side (the horizontal unit vector across each tube); with heated-foil tubes tube_foil
+(heating per area [W/m^2], foil heat capacity per area [J/(m^2 K)], bin area [m^2], G / ds^2
+[W/(m^2 K)]; zeros for other tubes), tube_bin_T (foil temperature by angle bin [K]), tube_bin_dT (its change in the step)
 and tube_bin_Tsum (its time integral since the profile start [K s]); with heated-foil walls
 plane_foil (heating per area, foil heat capacity per area, wall area) and plane_foil_T [K].
 With gas (frozen between gas steps, see kernels/gas_coupling.py): gK (drag coefficient
@@ -66,6 +67,7 @@ import taichi as ti
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.averaging import channels
 from tidem.kernels.broadphase import QUIET_GROUPS, scan_blocks
+from tidem.kernels.contact import BLOCKS
 from tidem.kernels.geometry import slab_layout
 from tidem.mesh_bins import MESH_SLOTS
 from tidem.model import Model
@@ -227,11 +229,13 @@ def _place_heat_fields(p: _Placer, model: Model) -> None:
     p.place((NS,), "surf_T")
     p.place((NS,), "surf_rate")
     p.place((NS,), "surf_energy", ti.f64)
+    p.place((BLOCKS, NS), "surf_rate_block")  # each block of slabs' share of surf_rate (kernels/surface_contact.py)
     p.S.conduct = ti.field(ti.i32)  # this step's conduction: heat.conduction_interval steps of it, or 0 (kernels/contact.py)
     p.fb.place(p.S.conduct)
     n_tubes, bins = len(model.tubes), model.angle_bins
     if bins:
         p.place((n_tubes, bins), "tube_bin_rate")
+        p.place((BLOCKS, n_tubes * bins), "tube_bin_block")  # [block, tube * bins + bin]
         p.place((n_tubes, bins), "tube_bin_energy", ti.f64)
         p.place((n_tubes,), "tube_side", n=3)
     if feat.wall_foil:
