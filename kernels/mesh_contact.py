@@ -98,10 +98,13 @@ def closest_on_triangle(x, a, b, c):
 
 
 def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int, reach: float, on_tol: float,
-                       heat: bool, fluid_layer: float, radiation: bool, grain_scale: float, grid_funcs, radius_of):
+                       heat: bool, fluid_layer: float, radiation: bool, grain_scale: float, grid_funcs, radius_of,
+                       blocks: bool = False):
     """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
-    torque, heat_in, worst, touching)`, which adds particle i's contacts with every mesh to the sums
-    handed in (force, torque, heat flow into i [W], largest overlap / r_i, contacts) and returns them;
+    torque, heat_in, worst, touching, blk)`, which adds particle i's contacts with every mesh to the sums
+    handed in (force, torque, heat flow into i [W], largest overlap / r_i, contacts) and returns them, the
+    heat flow into a heated mesh booked in block blk's row with `blocks` (surf_rate_block, added up in
+    block order: `kernels/surface_contact.py`), else atomically in surf_rate;
     `list_candidates(i)` (the broad phase, run on each particle by the neighbour build). `n_surf`: planes
     and tubes before the meshes in the surface tables (S.ps, surf_T, surf_rate); `M`, `WM`: candidates and
     contact slots per particle; `reach`: how far beyond its radius a particle lists triangles (skin
@@ -114,6 +117,14 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     cg = float(grain_scale)
     tol2 = on_tol * on_tol
+
+    @ti.func
+    def book(s, flow, blk):
+        """Heat flow [W] into heated mesh s (its index among the surfaces)."""
+        if ti.static(blocks):
+            S.surf_rate_block[blk, s] += flow
+        else:
+            ti.atomic_add(S.surf_rate[s], flow)
 
     @ti.func
     def triangle(k):
@@ -184,7 +195,7 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
 
     @ti.func
     def touch(i, k, p, feature, d2, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, used, force, torque, heat_in, worst,
-              touching):
+              touching, blk):
         """Contact of particle i with listed triangle k (closest point p, `feature`, squared distance d2 within
         reach): the contact law and its history slot if it touches, else the gas lens' conduction; added to
         the sums, `used` (bit q: slot q holds a contact of this step) updated."""
@@ -236,7 +247,7 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
                         if ti.static(radiation):
                             flow += wall_radiation(params, ri, S.surf_T[s], S.T[i])
                         heat_in += flow
-                        ti.atomic_add(S.surf_rate[s], flow)
+                        book(s, flow, blk)
                 if diag:
                     worst = ti.max(worst, delta / ri)
                     touching += 1
@@ -246,11 +257,11 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
                     flow = cg * pfp_conductance(params, ri, -delta / cg, fluid_layer * ri / cg) * (
                         S.surf_T[s] - S.T[i])
                     heat_in += flow
-                    ti.atomic_add(S.surf_rate[s], flow)
+                    book(s, flow, blk)
         return used, force, torque, heat_in, worst, touching
 
     @ti.func
-    def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching):
+    def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching, blk):
         """Particle i's mesh contacts (and gas-lens conduction to heated meshes), added to the sums. A particle
         whose listed triangles all lie in one flat patch (S.mc_flat[i] >= 0, `list_candidates`) and whose
         centre lies over the face of one of them touches that face only (module docstring: the others'
@@ -275,7 +286,7 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
                         if d2 < near2:
                             used, force, torque, heat_in, worst, touching = touch(
                                 i, k, p, feature, d2, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, used, force,
-                                torque, heat_in, worst, touching)
+                                torque, heat_in, worst, touching, blk)
                         break
             if not found:
                 d2s = ti.Vector([0.0] * M)  # each listed triangle's squared distance and feature, for `suppressed`
@@ -294,7 +305,7 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
                         if hits == 1 or not suppressed(i, o, p, feature, d2, cnt, ri, d2s, features):
                             used, force, torque, heat_in, worst, touching = touch(
                                 i, k, p, feature, d2, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, used, force,
-                                torque, heat_in, worst, touching)
+                                torque, heat_in, worst, touching, blk)
             for slot in range(WM):
                 if not (used >> slot) & 1:
                     S.mh_id[i, slot] = -1

@@ -18,9 +18,10 @@ bin of the contact point (omega = atan2(side, up), 0 = top, 180 deg = bottom) in
 heated foil's own temperature (per angle bin of a tube, one per wall) takes the place of a fixed one.
 With `blocks` (the CPU's slab passes, `kernels/contact.py`) each block of slabs books its particles'
 flows in rows of its own (surf_rate_block, tube_bin_block: one thread a block, each in the block's
-particle order) and the pass adds the blocks up in block order (`sum_blocks`): the same sums on any
-thread count, so a heated foil, whose temperature follows them, keeps float64 runs bit-reproducible.
-Without (a GPU), the flows are atomic adds to surf_rate and tube_bin_rate.
+particle order; the mesh pass books the meshes' flows likewise by blocks of particles) and the pass
+adds the blocks up in block order (`sum_blocks`): the same sums on any thread count, so a heated foil,
+whose temperature follows them, keeps float64 runs bit-reproducible. Without (a GPU), the flows are
+atomic adds to surf_rate and tube_bin_rate.
 """
 
 from types import SimpleNamespace
@@ -145,10 +146,11 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
 
     @ti.func
     def clear_blocks():
-        """Zero the blocks' rows before a pass that conducts (serial: a few hundred items)."""
+        """Zero the blocks' rows before a pass that conducts (serial: a few hundred items), the meshes'
+        columns (which `kernels/mesh_contact.py` books in) included."""
         if ti.static(heat and blocks):
             ti.loop_config(serialize=True)
-            for blk, s in ti.ndrange(blocks, n_surf):
+            for blk, s in ti.ndrange(blocks, S.surf_rate_block.shape[1]):
                 S.surf_rate_block[blk, s] = 0.0
             if ti.static(angle_bins > 0):
                 ti.loop_config(serialize=True)
@@ -157,10 +159,10 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
 
     @ti.func
     def sum_blocks():
-        """surf_rate and tube_bin_rate of the planes and tubes: the blocks' rows added up in block order."""
+        """surf_rate and tube_bin_rate of the planes, tubes and meshes: the blocks' rows added up in block order."""
         if ti.static(heat and blocks):
             ti.loop_config(serialize=True)
-            for s in range(n_surf):
+            for s in range(S.surf_rate_block.shape[1]):
                 total = 0.0
                 for blk in range(blocks):
                     total += S.surf_rate_block[blk, s]

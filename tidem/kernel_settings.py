@@ -32,16 +32,17 @@ def quiet_bounds(model: Model) -> tuple[float, float]:
     return 0.5 * model.skin, model.skin
 
 
-def mesh_settings(model: Model) -> tuple[int, int, int, float, float] | None:
+def mesh_settings(model: Model) -> tuple[int, int, int, float, float, bool] | None:
     """What the contact kernel needs of the mesh walls (`kernels/mesh_contact.py`): their number, the
     candidate triangles and contact slots per particle, the tolerance [m] within which a closest
     point lies on another triangle (1e-6 of the smallest radius plus 64 rounding units of the largest
-    coordinate), and how far beyond its radius a particle lists triangles [m] (`mesh_bins.mesh_table`);
-    None without meshes."""
+    coordinate), how far beyond its radius a particle lists triangles [m] (`mesh_bins.mesh_table`),
+    and whether any has a temperature; None without meshes."""
     if not model.features.n_meshes:
         return None
     return (model.features.n_meshes, model.mesh_table.candidates, MESH_SLOTS,
-            1e-6 * float(model.radius.min()) + 64 * rounding_unit(model), model.mesh_table.list_reach)
+            1e-6 * float(model.radius.min()) + 64 * rounding_unit(model), model.mesh_table.list_reach,
+            any(m.temperature is not None for m in model.meshes))
 
 
 def static_surfaces(model: Model) -> int:
