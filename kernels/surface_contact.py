@@ -38,9 +38,9 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
     """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
     torque, heat_in, worst, touching, blk)`, which adds particle i's contacts with every plane and tube to
     the sums it is handed and returns them, booking its heat flows in block blk's rows where `blocks` (the
-    number of blocks) is given; `sum_blocks()`, which adds those rows up into surf_rate and tube_bin_rate;
-    `mark_near(i)` (None without `cull`). `respond`: the contact
-    law (`contact_laws.make_contact_response`); `s_one`: each surface's material-surface parameter
+    number of rows) is given; `clear_blocks()` and `sum_blocks()`, which zero those rows before a pass and
+    add them up into surf_rate and tube_bin_rate after it; `mark_near(i)` (None without `cull`).
+    `respond`: the contact law (`contact_laws.make_contact_response`); `s_one`: each surface's material-surface parameter
     vector where all particles are of one material (constants of the kernel), else None (S.ps);
     `min_image`, `radius_of`: `kernels/geometry.py`, `kernels/sizes.py`."""
     n_planes = len(planes)
