@@ -25,11 +25,17 @@ def _twin(field):
     return ti.field(field.dtype, shape=field.shape)
 
 
+UNROLL = 32  # Taichi's unrolling limit (ti.init's unrolling_limit, default 32)
+
+
 def make_storage_permuter(S, names):
     """Return the kernel permute(n): the fields `names` of S (per-particle, [capacity] or
     [capacity, K] rows; `nbr` renumbered) stored in the order S.sorted_idx[0:n]. Allocates a scratch
     twin of each (the particle fields' memory once more)."""
     plain = [(getattr(S, name), _twin(getattr(S, name))) for name in names if name != "nbr"]
+    # in groups of at most UNROLL: Taichi warns at compile time of a static loop over more (a run's first
+    # start printed that warning twice)
+    groups = [plain[a:a + UNROLL] for a in range(0, len(plain), UNROLL)]
     nbr_twin = _twin(S.nbr)
     renumber = ti.field(ti.i32, shape=S.x.shape[0])
     K = S.nbr.shape[1]
@@ -51,11 +57,13 @@ def make_storage_permuter(S, names):
             old = S.sorted_idx[i]
             for k in range(K):  # before nbr_n is permuted: each row's length where it was
                 nbr_twin[i, k] = renumber[S.nbr[old, k]] if k < S.nbr_n[old] else -1
-            for field, twin in ti.static(plain):
-                copy_row(twin, i, field, old)
+            for group in ti.static(groups):
+                for field, twin in ti.static(group):
+                    copy_row(twin, i, field, old)
         for i in range(n):
             copy_row(S.nbr, i, nbr_twin, i)
-            for field, twin in ti.static(plain):
-                copy_row(field, i, twin, i)
+            for group in ti.static(groups):
+                for field, twin in ti.static(group):
+                    copy_row(field, i, twin, i)
 
     return permute
