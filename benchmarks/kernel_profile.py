@@ -17,12 +17,11 @@ from pathlib import Path
 
 import numpy as np
 import taichi as ti
-import typer
 from taichi.lang import impl
 
 from tidem import runtime
 from tidem.bench import bench_scene, profile_scene, tiled_bed
-from tidem.cli_common import build_or_exit, load_scene
+from tidem.cli_common import build_or_exit, load_scene, script_main
 from tidem.launch import InputError, load_checkpoint
 from tidem.model import build_model
 from tidem.scene.load import validate
@@ -64,9 +63,4 @@ def print_quantiles(top: int = 8) -> None:
 
 
 if __name__ == "__main__":
-    args = sys.argv[1:]
-    numbers = [a for a in args[2:4] if a.isdigit()]
-    try:
-        main(args[0], args[1], *map(int, numbers), sets=args[2 + len(numbers):])
-    except typer.Exit as stop:  # the scene or checkpoint was refused; the reason is printed
-        sys.exit(stop.exit_code)
+    script_main(main)

@@ -17,11 +17,10 @@ from pathlib import Path
 
 import numpy as np
 import taichi as ti
-import typer
 
 from tidem import checkpoint, runtime
 from tidem.bench import advance
-from tidem.cli_common import build_or_exit, load_scene
+from tidem.cli_common import build_or_exit, load_scene, script_main
 from tidem.launch import InputError, load_checkpoint
 from tidem.phases import SAMPLE_EVERY, STEP_PHASES, PhaseTimer, clock, sampled_step
 from tidem.solver import Solver
@@ -89,9 +88,4 @@ def main(scene: str, run_dir: str, steps: int = 4000, threads: int = 2, sets: li
 
 
 if __name__ == "__main__":
-    args = sys.argv[1:]
-    numbers = [a for a in args[2:4] if a.isdigit()]
-    try:
-        main(args[0], args[1], *map(int, numbers), sets=args[2 + len(numbers):])
-    except typer.Exit as stop:  # the scene or checkpoint was refused; the reason is printed
-        sys.exit(stop.exit_code)
+    script_main(main)

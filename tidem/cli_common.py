@@ -65,3 +65,16 @@ def writable(out_dir: Path, option: str) -> None:
         check(out_dir, option)
     except InputError as exc:
         fail(str(exc), 2)
+
+
+def script_main(main) -> None:
+    """Call main(SCENE, RUN_DIR, [INT [INT]], sets=[KEY=VALUE ...]) with sys.argv, as the scripts in benchmarks/
+    take their arguments; a scene or checkpoint refused (`typer.Exit`, its reason printed) exits with its code."""
+    import sys
+
+    args = sys.argv[1:]
+    numbers = [a for a in args[2:4] if a.isdigit()]
+    try:
+        main(args[0], args[1], *map(int, numbers), sets=args[2 + len(numbers):])
+    except typer.Exit as stop:
+        sys.exit(stop.exit_code)
