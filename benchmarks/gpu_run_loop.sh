@@ -3,6 +3,8 @@
 # snapshots every 0.02 s, no frames) as a run, developed and then measured from a checkpoint, this
 # tree against a baseline tree, and the synchronised profile of the same developed state.
 #   bash benchmarks/gpu_run_loop.sh OUT BASE [DEVELOP_S]
+# (The figures of 2026-11-27; a checkpoint of one version need not resume in another, so against a tree
+# from before 2026-11-28 use gpu_lab_bed.sh, which runs BASE from its fill.)
 # OUT receives run_loop.log and the JSON results; BASE is the baseline tree (tidem/, with
 # tidem/kernels and tidem/scenes as folders, e.g. `git archive` of the older commit). Steps, each
 # with its own time limit:

@@ -259,14 +259,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
         if ti.static(heat):
             S.conduct[None] = conduct
             if conduct:
-                ti.loop_config(serialize=True)  # a few items: no thread-pool round trip
-                for s in range(n_surf + n_meshes):
-                    S.surf_rate[s] = 0.0
-                if ti.static(angle_bins > 0):
-                    ti.loop_config(serialize=True)
-                    for k, b in ti.ndrange(*S.tube_bin_rate.shape):
-                        S.tube_bin_rate[k, b] = 0.0
-                surf.clear_blocks()
+                surf.clear_flows()  # (serial loops: a few items, no thread-pool round trip)
 
     def passes(then=None):
         """Both passes (module docstring) as a Taichi func passes(n, t, dt, conduct, diag, drift, kick)

@@ -38,8 +38,8 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
     """Return a namespace of Taichi funcs: `visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force,
     torque, heat_in, worst, touching, blk)`, which adds particle i's contacts with every plane and tube to
     the sums it is handed and returns them, booking its heat flows in block blk's rows where `blocks` (the
-    number of rows) is given; `clear_blocks()` and `sum_blocks()`, which zero those rows before a pass and
-    add them up into surf_rate and tube_bin_rate after it; `mark_near(i)` (None without `cull`).
+    number of rows) is given; `clear_flows()` and `sum_blocks()`, which zero the flows (those rows) before a pass
+    and add the rows up into surf_rate and tube_bin_rate after it; `mark_near(i)` (None without `cull`).
     `respond`: the contact law (`contact_laws.make_contact_response`); `s_one`: each surface's material-surface parameter
     vector where all particles are of one material (constants of the kernel), else None (S.ps);
     `min_image`, `radius_of`: `kernels/geometry.py`, `kernels/sizes.py`."""
@@ -145,9 +145,10 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.func
-    def clear_blocks():
-        """Zero the blocks' rows before a pass that conducts (serial: a few hundred items), the meshes'
-        columns (which `kernels/mesh_contact.py` books in) included."""
+    def clear_flows():
+        """Zero the surfaces' heat flows before a pass that conducts (serial: a few hundred items at most):
+        with `blocks` the blocks' rows, the meshes' columns (`kernels/mesh_contact.py`) included, which
+        `sum_blocks` adds up into surf_rate and tube_bin_rate after the pass; else those themselves."""
         if ti.static(heat and blocks):
             ti.loop_config(serialize=True)
             for blk, s in ti.ndrange(blocks, S.surf_rate_block.shape[1]):
@@ -156,6 +157,14 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 ti.loop_config(serialize=True)
                 for blk, kb in ti.ndrange(blocks, len(tubes) * angle_bins):
                     S.tube_bin_block[blk, kb] = 0.0
+        elif ti.static(heat):
+            ti.loop_config(serialize=True)
+            for s in range(S.surf_rate.shape[0]):
+                S.surf_rate[s] = 0.0
+            if ti.static(angle_bins > 0):
+                ti.loop_config(serialize=True)
+                for k, b in ti.ndrange(len(tubes), angle_bins):
+                    S.tube_bin_rate[k, b] = 0.0
 
     @ti.func
     def sum_blocks():
@@ -263,4 +272,4 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
             S.near[i] = bits
 
     return SimpleNamespace(visit=visit, mark_near=mark_near_surfaces if cull else None, n_surf=n_surf,
-                           clear_blocks=clear_blocks, sum_blocks=sum_blocks)
+                           clear_flows=clear_flows, sum_blocks=sum_blocks)
