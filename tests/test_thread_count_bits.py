@@ -21,6 +21,9 @@ def run(out, threads: int, args: list[str]) -> dict:
     done = subprocess.run([sys.executable, "-m", "tidem", "scene", *args, "--no-render", "--quiet", "--out", str(out)],
                           env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stdout + done.stderr
+    # tidem takes its thread count from that variable and says nothing of it (Taichi warned that its
+    # own argument overrode the variable, though both said the same)
+    assert "overridden" not in done.stderr, done.stderr
     with np.load(out / "checkpoint.npz") as data:
         return {k: data[k] for k in data.files if k != "meta"}
 

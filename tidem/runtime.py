@@ -102,14 +102,18 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
     fp = ti.f32 if precision == "float32" else ti.f64  # 'mixed' stores only the contact history in float32
     existing = process_threads()
     buf = io.StringIO()
+    # Taichi reads TI_CPU_MAX_NUM_THREADS itself, and warns on its C++ log (past the redirect) when an
+    # argument overrides it: pass the argument only where it differs
+    same = os.environ.get("TI_CPU_MAX_NUM_THREADS", "").strip() == str(threads)
+    thread_arg = {} if same else {"cpu_max_num_threads": threads}
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
         ti.init(
             arch=_arch_for(arch),
             default_fp=fp,
             default_ip=ti.i32,
-            cpu_max_num_threads=threads,
             offline_cache=True,
             log_level=ti.ERROR,
+            **thread_arg,
         )
     started = _started_arch()
     clear_stale_cache_lock(ti.lang.impl.current_cfg().offline_cache_file_path)
