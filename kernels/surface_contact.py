@@ -45,7 +45,8 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
     `min_image`, `radius_of`: `kernels/geometry.py`, `kernels/sizes.py`."""
     n_planes = len(planes)
     moving = [any(p["vel"]) for p in planes]
-    n_surf = n_planes + len(tubes)
+    n_tubes = len(tubes)  # (a Python int: Taichi's AST transformer warns of len() inside a func)
+    n_surf = n_planes + n_tubes
     zero3 = ti.Vector([0.0, 0.0, 0.0])
     cg = float(grain_scale)
     pfp = heat and fluid_layer > 0.0
@@ -155,7 +156,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 S.surf_rate_block[blk, s] = 0.0
             if ti.static(angle_bins > 0):
                 ti.loop_config(serialize=True)
-                for blk, kb in ti.ndrange(blocks, len(tubes) * angle_bins):
+                for blk, kb in ti.ndrange(blocks, n_tubes * angle_bins):
                     S.tube_bin_block[blk, kb] = 0.0
         elif ti.static(heat):
             ti.loop_config(serialize=True)
@@ -163,7 +164,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 S.surf_rate[s] = 0.0
             if ti.static(angle_bins > 0):
                 ti.loop_config(serialize=True)
-                for k, b in ti.ndrange(len(tubes), angle_bins):
+                for k, b in ti.ndrange(n_tubes, angle_bins):
                     S.tube_bin_rate[k, b] = 0.0
 
     @ti.func
@@ -178,7 +179,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 S.surf_rate[s] = total
             if ti.static(angle_bins > 0):
                 ti.loop_config(serialize=True)
-                for k, b in ti.ndrange(len(tubes), angle_bins):
+                for k, b in ti.ndrange(n_tubes, angle_bins):
                     total = 0.0
                     for blk in range(blocks):
                         total += S.tube_bin_block[blk, k * angle_bins + b]

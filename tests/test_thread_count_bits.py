@@ -24,6 +24,8 @@ def run(out, threads: int, args: list[str]) -> dict:
     # tidem takes its thread count from that variable and says nothing of it (Taichi warned that its
     # own argument overrode the variable, though both said the same)
     assert "overridden" not in done.stderr, done.stderr
+    # nor Taichi's warnings at compile time (a len() inside a func, a long static unrolling)
+    assert "Warning" not in done.stderr, done.stderr
     with np.load(out / "checkpoint.npz") as data:
         return {k: data[k] for k in data.files if k != "meta"}
 
