@@ -140,12 +140,13 @@ def run_matrix(sizes: list[int], precisions: list[str], steps: int, threads: int
 
 
 def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dict, dict] | None = None,
-                  split: bool = True) -> dict:
+                  split: bool = True, prepare=None) -> dict:
     """Run `warmup` steps of a loaded scene (from a checkpoint `resume`, `tidem.checkpoint.load`,
     if given), then `steps` timed steps by phase; returns {scene, particles, steps, wall_s,
     particle_steps_per_s, profile}. With `split` the contact passes and the kick run as kernels
-    of their own, so that the profile tells them apart (a run takes them in one launch). Taichi
-    must be initialised."""
+    of their own, so that the profile tells them apart (a run takes them in one launch).
+    `prepare`: a function of the new solver called before the steps (a benchmark's own restore).
+    Taichi must be initialised."""
     import taichi as ti
 
     from tidem import checkpoint
@@ -156,6 +157,8 @@ def profile_scene(loaded, steps: int, warmup: int, model=None, resume: tuple[dic
     solver = Solver(model)
     if resume is not None:
         checkpoint.restore(solver, *resume)
+    if prepare is not None:
+        prepare(solver)
     solver.timer.sync = ti.lang.impl.current_cfg().arch != ti.cpu
     solver.split_passes = split
     advance(solver, warmup)
