@@ -39,7 +39,8 @@ particle hands the heat of its last step, and the gas exchange the gas already c
 rest of the gas step (`steps_left` DEM steps), back to its gas cells (`Qs`, added at the next
 gas step). What particles give their gas cells (the O2 a char particle takes, a removed particle's
 heat) is booked per particle (`gas_book`) in the parallel loop and added to the cells after it, in
-particle order: the same sums, bit for bit, on any thread count. Per-step stability (share of the
+particle order: the same sums, bit for bit, on any thread count; so are the totals of S.rsum on the CPU
+(each particle's share booked in its row of `rbook`, added up in particle order after the loop). Per-step stability (share of the
 mass used in one step) is refused at set-up (tidem.reactions); the last step of a particle's life
 is clamped to what it has left.
 """
@@ -53,6 +54,15 @@ from .ordered import in_order
 
 CHAR, POLY, SUBL = 0, 1, 2
 REACTED, O2_USED, HEAT_RELEASED, LATENT, ENTHALPY_OUT, REFUND, GONE, ESCAPED, MASS_ESCAPED = range(9)
+# the totals (S.rsum slots) that each kind of reaction books
+BOOKED = {CHAR: (REACTED, O2_USED, HEAT_RELEASED, ENTHALPY_OUT, GONE, REFUND),
+          POLY: (REACTED, HEAT_RELEASED, ENTHALPY_OUT),
+          SUBL: (REACTED, LATENT, ENTHALPY_OUT, GONE, REFUND, ESCAPED, MASS_ESCAPED)}
+
+
+def booked_slots(kinds) -> list[int]:
+    """The S.rsum slots that reactions of these kinds book (the columns of S.rbook)."""
+    return sorted(set().union(*(BOOKED[k] for k in kinds)))
 
 
 def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float = 1.0, mu: float = 1.0,
@@ -62,8 +72,21 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
     ordered = in_order()
     timing = any(r["kind"] == SUBL for r in reactions)
     burning = any(r["kind"] == CHAR for r in reactions)
+    slots = booked_slots(r["kind"] for r in reactions)
     if gas:
         cic, corner, weight, corners = make_cic(gg)
+
+    @ti.func
+    def book(i, slot: ti.template(), amount):
+        """Add `amount` to the total S.rsum[slot]: on the CPU in particle i's own row of S.rbook, which the
+        kernel adds up in particle order after its loop (the same sums on any thread count, and no atomic
+        add to one address from every thread: those took four fifths of a polymerizing bed's reaction
+        step); on a GPU to the total itself."""
+        ti.static_assert(slot in slots, "a reaction books a total that BOOKED does not list for its kind")
+        if ti.static(ordered):
+            S.rbook[i][ti.static(slots.index(slot))] += amount
+        else:
+            ti.atomic_add(S.rsum[slot], amount)
 
     @ti.func
     def deposit(F: ti.template(), x, amount):
@@ -94,7 +117,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         if ti.static(gas):
             refund += S.gH[i] * (S.gT[i] - S.T[i]) * dt * steps_left
             S.gas_book[i][1] = refund
-        S.rsum[REFUND] += refund
+        book(i, REFUND, refund)
         S.active[i] = 0
         S.v[i] = ti.Vector([0.0, 0.0, 0.0])
         S.w[i] = ti.Vector([0.0, 0.0, 0.0])
@@ -122,13 +145,13 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
             if dm > 0.0:
                 o2 = dm * rc["o2_per_c"]
                 S.gas_book[i][0] = o2
-                S.rsum[REACTED] += dm
-                S.rsum[O2_USED] += o2
-                S.rsum[HEAT_RELEASED] += dm * rc["heat_per_c"]
-                S.rsum[ENTHALPY_OUT] += c * T * dm
+                book(i, REACTED, dm)
+                book(i, O2_USED, o2)
+                book(i, HEAT_RELEASED, dm * rc["heat_per_c"])
+                book(i, ENTHALPY_OUT, c * T * dm)
                 heat = S.q[i] + dm * rc["heat_per_c"] / dt
                 if dm >= m:
-                    S.rsum[GONE] += rc["cg"] ** 3
+                    book(i, GONE, rc["cg"] ** 3)
                     remove(i, t, dt, steps_left, heat * dt)
                     gone = 1
                 else:
@@ -149,11 +172,11 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
             if active:
                 q = rc["k"] * ti.exp(-rc["E_R"] * (1.0 / T - 1.0 / rc["T_ref"])) * m * rc["enthalpy"]
                 S.q[i] += q
-                S.rsum[HEAT_RELEASED] += q * dt
+                book(i, HEAT_RELEASED, q * dt)
                 if ti.static(grow):
                     dm = q * dt / rc["enthalpy"]
-                    S.rsum[REACTED] += dm
-                    S.rsum[ENTHALPY_OUT] -= c * T * dm
+                    book(i, REACTED, dm)
+                    book(i, ENTHALPY_OUT, -(c * T * dm))
                     set_mass(i, m + dm, True)
             return 0
 
@@ -164,9 +187,9 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         def subl(i, t, dt, steps_left, T, m, c):
             gone = 0
             if S.x[i][2] > rc["exit"]:
-                S.rsum[ESCAPED] += rc["cg"] ** 3
-                S.rsum[MASS_ESCAPED] += m
-                S.rsum[ENTHALPY_OUT] += c * T * m
+                book(i, ESCAPED, rc["cg"] ** 3)
+                book(i, MASS_ESCAPED, m)
+                book(i, ENTHALPY_OUT, c * T * m)
                 remove(i, -t, dt, steps_left, S.q[i] * dt)
                 gone = 1
             else:
@@ -174,11 +197,11 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                 excess = (T + dt * S.q[i] / (m * c) - T_s) * m * c  # heat beyond T_s [J]
                 if excess > 0.0:
                     dm = ti.min(excess / rc["L"], m)
-                    S.rsum[REACTED] += dm
-                    S.rsum[LATENT] += dm * rc["L"]
-                    S.rsum[ENTHALPY_OUT] += c * T_s * dm
+                    book(i, REACTED, dm)
+                    book(i, LATENT, dm * rc["L"])
+                    book(i, ENTHALPY_OUT, c * T_s * dm)
                     if dm >= m:
-                        S.rsum[GONE] += rc["cg"] ** 3
+                        book(i, GONE, rc["cg"] ** 3)
                         remove(i, t, dt, steps_left, S.q[i] * dt - dm * rc["L"] - c * (T_s - T) * m)
                         gone = 1
                     else:
@@ -206,16 +229,21 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                 for k in ti.static(range(len(steps))):
                     if S.rx[i] == k:
                         removed += steps[k](i, t, dt, steps_left, T, m, c)
-        if ti.static(gas):
+        if ti.static(gas or ordered):
             if ti.static(ordered):
                 ti.loop_config(serialize=True)  # particle order, whatever the thread count
             for i in range(n):
-                booked = S.gas_book[i]
-                if booked[0] != 0.0 or booked[1] != 0.0:
-                    if ti.static(burning):
-                        deposit(G.o2_sink, S.x[i], booked[0])
-                    deposit(G.Qs, S.x[i], booked[1])
-                    S.gas_book[i] = ti.Vector([0.0, 0.0])
+                if ti.static(ordered):
+                    for k in ti.static(range(len(slots))):
+                        S.rsum[slots[k]] += S.rbook[i][k]
+                        S.rbook[i][k] = 0.0
+                if ti.static(gas):
+                    booked = S.gas_book[i]
+                    if booked[0] != 0.0 or booked[1] != 0.0:
+                        if ti.static(burning):
+                            deposit(G.o2_sink, S.x[i], booked[0])
+                        deposit(G.Qs, S.x[i], booked[1])
+                        S.gas_book[i] = ti.Vector([0.0, 0.0])
         return removed
 
     return react

@@ -33,10 +33,10 @@ FORMAT = 3
 # end time and the descriptive text. Anything else would make the continuation a different run.
 RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
 # Rewritten before use (the conduction flag by every force pass, the blocks' shares of the surfaces' heat
-# flows by every pass that conducts, the reactions' gas book by every reaction step, `sums` by every energy sum and, in the gas, `sums` and the direct solve's band by every pressure
+# flows by every pass that conducts, the reactions' gas book and their totals' rows (rbook) by every reaction step, `sums` by every energy sum and, in the gas, `sums` and the direct solve's band by every pressure
 # solve, the rest by every neighbour build): not kept. The quiet partners' groups (nbr_touch, nbr_end, nbr_gap) are not kept
 # either: a restored run evaluates every listed pair until its next build, which gives the same bits (kernels/pair_contact.py).
-TRANSIENT = ("conduct", "gas_book", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
+TRANSIENT = ("conduct", "gas_book", "rbook", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
              "cell_count", "cell_start", "cell_fill", "cell_block", "sort_tail", "pcell", "sorted_idx", "sums", "worst", "worst_at",
              "nbr_touch", "nbr_end",
              "nbr_gap", "band", "band_y", "surf_rate_block", "tube_bin_block")

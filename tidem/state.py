@@ -48,7 +48,8 @@ With gas and coarse-grained groups: cg (k: the parcel's diameter over its grains
 With reactions: rx (index of the particle's reaction, -1 = inert), rsum (float64 totals of
 `kernels/reactions.py`: reacted mass [kg], O2 used [kg], heat released [J], latent heat [J],
 sensible heat leaving with reacted mass [J], heat handed back to the gas [J], particles gone,
-particles escaped, escaped mass [kg]); with sublimation rt0 (time first seen [s]) and rt1
+particles escaped, escaped mass [kg]) and on the CPU rbook (each particle's share of the totals that its
+reactions book in a step, zero between steps); with sublimation rt0 (time first seen [s]) and rt1
 (time sublimated away [s], minus the time it left through the exit, 0 while present).
 Wall and tube history, shape [capacity, W]: wid (surface index or -1), wft, wmr, wdmax;
 wmask [capacity]: bit s set while surface s holds one of the particle's slots; near
@@ -69,9 +70,11 @@ from tidem.kernels.averaging import channels
 from tidem.kernels.broadphase import QUIET_GROUPS, scan_blocks
 from tidem.kernels.contact import BLOCKS
 from tidem.kernels.geometry import slab_layout
+from tidem.kernels.ordered import in_order
+from tidem.kernels.reactions import booked_slots
 from tidem.mesh_bins import MESH_SLOTS
 from tidem.model import Model
-from tidem.reactions import N_SUMS
+from tidem.reactions import KIND_IDS, N_SUMS
 from tidem.state_fill import fill_heat, fill_particles, fill_surfaces
 
 
@@ -268,6 +271,8 @@ def _place_reaction_fields(p: _Placer, model: Model) -> None:
     N = model.capacity
     p.per_particle((N,), "rx", ti.i32)
     p.place((N_SUMS,), "rsum", ti.f64)
+    if in_order():  # each particle's share of the totals in a step, added up in particle order (kernels/reactions.py)
+        p.place((N,), "rbook", ti.f64, n=len(booked_slots(KIND_IDS[name] for name in model.features.reactions)))
     if model.features.gas:  # what each particle gives its gas cells in a step (kernels/reactions.py)
         p.place((N,), "gas_book", n=2)
     if "sublimation" in model.features.reactions:
