@@ -6,8 +6,7 @@ bubbling bed's step, a wider skin trades builds for longer rows.
 
 RUN_DIR holds a checkpoint of SCENE (made at any skin). For each skin the scene is built at that skin
 (numerics.t_end raised past the checkpoint), the checkpoint's particles and gas are put into it, the
-neighbour rows emptied (every skin then starts with the tangential springs at zero) and rebuilt at the
-first step. The first CHECK_STEPS steps check that the skin changes nothing but the order of sums: the
+neighbour rows emptied (every skin then starts with the tangential springs at zero) and built anew. The first CHECK_STEPS steps check that the skin changes nothing but the order of sums: the
 largest difference of any particle's position from the first skin's is printed (rounding, 1e-14 m or so;
 a pair missed by a list would move its grains by a good part of an overlap). Then 100 warm-up steps and
 STEPS timed ones (default 1500) are booked by phase as `tidem bench --profile --fused` does; ROUNDS
@@ -23,17 +22,15 @@ from tidem.cli_common import build_or_exit, load_scene, script_main
 CHECK_STEPS = 200
 
 
-def fitted(meta: dict, arrays: dict, solver) -> dict:
+def fitted(arrays: dict, solver) -> dict:
     """The checkpoint's arrays in the shapes of `solver`'s fields: where the skin changed the row capacity or
-    the slabs, zeros (the first build rewrites them); every row emptied, every particle marked as moved a
-    metre since its build, so that the first step builds the rows anew."""
+    the slabs, zeros (the next build rewrites them); every row emptied."""
     copier = checkpoint._copier(solver)
     out = {}
     for name in copier.slots:
         shape = copier.shape(name)
         out[name] = arrays[name] if arrays[name].shape == shape else np.zeros(shape, arrays[name].dtype)
     out["state/nbr_n"] = np.zeros_like(out["state/nbr_n"])
-    out["state/x_build"] = out["state/x"] + 1.0
     return out
 
 
@@ -44,7 +41,8 @@ def main(scene: str, run_dir: str, steps: int = 1500, rounds: int = 2, sets: lis
     rows, checked = {}, {}
 
     def prepare(solver):
-        checkpoint.restore(solver, meta, fitted(meta, arrays, solver))
+        checkpoint.restore(solver, meta, fitted(arrays, solver))
+        solver.rebuild()  # the rows at this skin
         solver.advance(CHECK_STEPS)
         checked[solver.model.skin] = solver.state.x.to_numpy()[np.argsort(solver.state.ident.to_numpy())]
 
