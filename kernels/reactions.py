@@ -39,10 +39,10 @@ particle hands the heat of its last step, and the gas exchange the gas already c
 rest of the gas step (`steps_left` DEM steps), back to its gas cells (`Qs`, added at the next
 gas step). What particles give their gas cells (the O2 a char particle takes, a removed particle's
 heat) is booked per particle (`gas_book`) in the parallel loop and added to the cells after it, in
-particle order: the same sums, bit for bit, on any thread count; so are the totals of S.rsum on the CPU
-(each particle's share booked in its row of `rbook`, added up in particle order after the loop). Per-step stability (share of the
-mass used in one step) is refused at set-up (tidem.reactions); the last step of a particle's life
-is clamped to what it has left.
+particle order: the same sums, bit for bit, on any thread count; so are the totals of S.rsum on the
+CPU (each particle's share booked in its row of `rbook`, added up in particle order after the loop).
+Per-step stability (share of the mass used in one step) is refused at set-up (tidem.reactions); the
+last step of a particle's life is clamped to what it has left.
 """
 
 import math
@@ -234,9 +234,10 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                 ti.loop_config(serialize=True)  # particle order, whatever the thread count
             for i in range(n):
                 if ti.static(ordered):
-                    for k in ti.static(range(len(slots))):
-                        S.rsum[slots[k]] += S.rbook[i][k]
-                        S.rbook[i][k] = 0.0
+                    if S.rx[i] >= 0:  # (an inert particle's row stays zero)
+                        for k in ti.static(range(len(slots))):
+                            S.rsum[slots[k]] += S.rbook[i][k]
+                            S.rbook[i][k] = 0.0
                 if ti.static(gas):
                     booked = S.gas_book[i]
                     if booked[0] != 0.0 or booked[1] != 0.0:
