@@ -13,6 +13,8 @@ STEPS timed ones (default 1500) are booked by phase as `tidem bench --profile --
 (default 2) repeats the skins in alternating order.
 """
 
+import sys
+
 import numpy as np
 
 from tidem import checkpoint, runtime
@@ -35,8 +37,14 @@ def fitted(arrays: dict, solver) -> dict:
 
 
 def main(scene: str, run_dir: str, steps: int = 1500, rounds: int = 2, sets: list[str] = ()) -> None:
-    skins, sets = [float(s) for s in sets[0].split(",")], list(sets[1:])
-    meta, arrays = checkpoint.load(run_dir)
+    try:
+        skins, sets = [float(s) for s in sets[0].split(",")], list(sets[1:])
+    except (IndexError, ValueError):
+        sys.exit("skin_profile.py: give the skins as numbers after the run folder, e.g. 0.1,0.2,0.3")
+    try:
+        meta, arrays = checkpoint.load(run_dir)
+    except checkpoint.CheckpointError as exc:
+        sys.exit(f"skin_profile.py: {exc}")
     t_end = f"numerics.t_end={2.0 * meta['solver']['t'] + 1.0}"
     rows, checked = {}, {}
 
