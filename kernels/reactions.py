@@ -9,8 +9,10 @@ Field 1969, Combust. Flame 13, 237: k_s = 8710 exp(-17967 K / T_p) g/(cm^2 s atm
     film         k_d = (M_C / nu) Sh D / (d R T_f),  T_f = (T_p + T_g)/2,
                  Sh = 2 + 0.6 Re^1/2 Sc^1/3 (Ranz-Marshall analogy), Re = rho_g |u - v| d / mu,
                  Sc = mu / (rho_g D); nu = 1 - phi/2 mol O2 per mol C (phi = co_fraction).
-  The particle loses dm = min(m_dot dt, m); the gas cell loses nu M_O2/M_C dm of O2 (deposited
-  into `o2_sink` with the cloud-in-cell weights, taken at the next gas step); the particle gets
+  Y is the cloud-in-cell mean of the fluid cells c around the particle, Y = sum w_c Y_c / sum w_c,
+  read every step. The particle loses dm = min(m_dot dt, m); the cells lose nu M_O2/M_C dm of O2,
+  each the share w_c Y_c / sum w_c Y_c (`o2_sink`, taken at the next gas step): m_dot is linear in
+  Y, so each cell gives what its own O2 drives and a cell without O2 gives none. The particle gets
   dm h_c (h_c the heat per kg C of tidem.reactions). `shrink` keeps the density (d ~ m^1/3),
   `density` keeps the diameter. A particle whose carbon is gone is removed.
 Polymerization (source 1, Kaneko et al. 1999): q = k_p p_M exp(-E/R (1/T - 1/T_ref)) m dH_p [W],
@@ -97,6 +99,34 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                 ti.atomic_add(F[corner(base, o, -1)], weight(frac, o, -1) * amount)
 
     @ti.func
+    def o2_weights(x):
+        """The O2 the gas cells around x offer: sum of w_c Y_c and of w_c over the fluid cells c of x's
+        cloud-in-cell cube (a solid cell, inside a tube, holds no gas)."""
+        base, frac = cic(x, -1)
+        wy = 0.0
+        wf = 0.0
+        for o_t in ti.static(corners(-1)):
+            o = ti.Vector(o_t)
+            J = corner(base, o, -1)
+            if G.solid[J] == 0:
+                w = weight(frac, o, -1)
+                wy += w * ti.max(G.Y[J], 0.0)
+                wf += w
+        return wy, wf
+
+    @ti.func
+    def take_o2(x, amount):
+        """Charge `amount` [kg] of O2 to the cells around x, each in proportion to w_c Y_c, the O2 it
+        gave the particle: the take from a cell is linear in its own Y, so a cell without O2 gives none."""
+        base, frac = cic(x, -1)
+        wy, wf = o2_weights(x)
+        for o_t in ti.static(corners(-1)):
+            o = ti.Vector(o_t)
+            J = corner(base, o, -1)
+            if G.solid[J] == 0:
+                ti.atomic_add(G.o2_sink[J], weight(frac, o, -1) * ti.max(G.Y[J], 0.0) / wy * amount)
+
+    @ti.func
     def set_mass(i, m_new, shrink: ti.template()):
         """New mass (and radius when shrinking at constant density); inverse mass, inertia and
         heat capacity follow."""
@@ -135,7 +165,12 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
         def char(i, t, dt, steps_left, T, m, c):
             gone = 0
             d = 2.0 * S.radius[i] / rc["cg"]  # the grain's diameter
-            p_o2 = ti.max(S.gY[i], 0.0) * rc["x_per_y"] * rc["pressure"]
+            wy, wf = o2_weights(S.x[i])
+            y = 0.0
+            if wf > 0.0:
+                y = wy / wf
+            S.gY[i] = y
+            p_o2 = y * rc["x_per_y"] * rc["pressure"]
             k_s = rc["A"] * ti.exp(-rc["E_R"] / T)
             w = (S.gu[i] - S.v[i]).norm()
             sh = 2.0 + 0.6 * ti.sqrt(rho_g * w * d / mu) * rc["sc"] ** (1.0 / 3.0)
@@ -242,7 +277,7 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                     booked = S.gas_book[i]
                     if booked[0] != 0.0 or booked[1] != 0.0:
                         if ti.static(burning):
-                            deposit(G.o2_sink, S.x[i], booked[0])
+                            take_o2(S.x[i], booked[0])
                         deposit(G.Qs, S.x[i], booked[1])
                         S.gas_book[i] = ti.Vector([0.0, 0.0])
         return removed

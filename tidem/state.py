@@ -43,7 +43,8 @@ plane_foil (heating per area, foil heat capacity per area, wall area) and plane_
 With gas (frozen between gas steps, see kernels/gas_coupling.py): gK (drag coefficient
 [kg/s]), geps (voidage), gu (gas velocity [m/s]) and ggp (pressure gradient [Pa/m]) at the
 particle; with heat also gH (gas-particle conductance [W/K]) and gT (gas temperature [K]).
-With species (O2 on the gas grid): gY (O2 mass fraction of the gas at the particle).
+With species (O2 on the gas grid): gY (O2 mass fraction of the gas at the particle; a burning
+particle reads its own every step, from the fluid cells alone, `kernels/reactions.py`).
 With gas and coarse-grained groups: cg (k: the parcel's diameter over its grains').
 With reactions: rx (index of the particle's reaction, -1 = inert), rsum (float64 totals of
 `kernels/reactions.py`: reacted mass [kg], O2 used [kg], heat released [J], latent heat [J],

@@ -22,7 +22,7 @@ SAND = {"density": 2500.0, "youngs_modulus": 1e7, "restitution": 0.9, "friction"
         "heat_capacity": 800.0}
 
 
-def char_scene(positions, d=1e-3, reaction=None, inlet=0.0, size=0.008, sand=None, **numerics):
+def char_scene(positions, d=1e-3, reaction=None, inlet=0.0, size=0.008, sand=None, gas=None, **numerics):
     groups = [{"name": "char", "material": "char", "diameter": {"value": d}, "positions": positions, "fixed": True}]
     if sand:
         groups.append({"name": "sand", "material": "sand", "diameter": {"value": 1e-3}, "positions": sand,
@@ -33,7 +33,7 @@ def char_scene(positions, d=1e-3, reaction=None, inlet=0.0, size=0.008, sand=Non
         particles=groups,
         heat={"initial_temperature": T_BED, "gas_conductivity": K_G},
         gas={"cell_size": 0.004, "density": RHO_G, "viscosity": MU_G, "heat_capacity": CP_G, "coupling_interval": 1,
-             "inlet_velocity": inlet, "oxygen": {"mole_fraction": X_O2, "diffusivity": D_O2}},
+             "inlet_velocity": inlet, "oxygen": {"mole_fraction": X_O2, "diffusivity": D_O2}, **(gas or {})},
         reactions=[{"type": "char_combustion", "group": "char", **(reaction or {})}],
         numerics={"dt": 1e-4, "force_dt": True, **numerics},
     )
@@ -62,6 +62,44 @@ def test_char_rate_matches_closed_form(solver_for, A, regime):
         assert burnt == pytest.approx(film, rel=1e-4)
     else:
         assert 0.1 < kinetic / film < 0.5, "Field's kinetics at 1123 K: mixed control for 1 mm char"
+
+
+def o2_after_one_step(s, Y):
+    """Set the gas' O2 mass fractions to Y, take one DEM step without a gas step (the first of two per gas step),
+    and return the O2 each cell was charged and the carbon burnt per second."""
+    s.gas.G.Y.from_numpy(Y)
+    s.step()
+    return s.gas.G.o2_sink.to_numpy(), s.state.rsum.to_numpy()[REACTED] / s.dt
+
+
+def test_a_cell_without_oxygen_gives_none(solver_for):
+    """A char particle at the corner shared by eight cells, the four cells at x < 4 mm emptied of O2:
+    it burns at the series rate of half the O2 fraction, and the whole O2 it took is charged to the four
+    cells that hold O2 (with the cloud-in-cell weights alone, half was charged to the empty cells, which
+    then went negative and stopped char_combustion runs)."""
+    s = solver_for(char_scene([[0.004, 0.004, 0.004]], gas={"coupling_interval": 2}))
+    Y = s.gas.G.Y.to_numpy()
+    Y[0] = 0.0
+    sink, burnt = o2_after_one_step(s, Y)
+    assert burnt == pytest.approx(series_rate(1e-3, T_BED, x=X_O2 / 2)[0], rel=1e-9)
+    assert np.all(sink[0] == 0.0)
+    assert sink[1].sum() == pytest.approx(s.state.rsum.to_numpy()[O2_USED], rel=1e-12)
+    assert np.ptp(sink[1]) <= 1e-12 * sink[1].max(), "the four full cells give alike"
+
+
+def test_a_char_beside_a_tube_takes_no_oxygen_from_inside_it(solver_for):
+    """Cells whose centre lies in a tube hold no gas: a char particle whose cloud-in-cell cube reaches
+    two of them sees the O2 of the fluid cells alone, and none of what it takes is charged to the solid
+    cells (whose charge the gas step never collects: that O2 would have left the balance)."""
+    raw = char_scene([[0.004, 0.004, 0.004]], gas={"coupling_interval": 2})
+    raw["tubes"] = [{"center": [0.002, 0.0, 0.002], "axis": "y", "diameter": 0.003, "material": "sand"}]
+    s = solver_for(raw)
+    solid = s.gas.G.solid.to_numpy() == 1
+    assert solid.sum() == 2, "the cells at x = z = 2 mm lie in the tube"
+    sink, burnt = o2_after_one_step(s, s.gas.G.Y.to_numpy())
+    assert burnt == pytest.approx(series_rate(1e-3, T_BED)[0], rel=1e-9)
+    assert np.all(sink[solid] == 0.0)
+    assert sink.sum() == pytest.approx(s.state.rsum.to_numpy()[O2_USED], rel=1e-12)
 
 
 def totals(s):
