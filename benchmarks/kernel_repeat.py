@@ -28,8 +28,8 @@ import typer
 
 from tidem import checkpoint
 from tidem.bench import advance, bench_scene, tiled_bed
-from tidem.cli import _checkpoint
 from tidem.cli_common import build_or_exit, load_scene
+from tidem.launch import InputError, load_checkpoint
 from tidem.runtime import ensure_taichi
 from tidem.model import build_model
 from tidem.scene.load import validate
@@ -47,7 +47,7 @@ def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
         ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
         model = build_or_exit(loaded)
         solver = Solver(model)
-        checkpoint.restore(solver, *_checkpoint(Path(run_dir), loaded, model))
+        checkpoint.restore(solver, *load_checkpoint(Path(run_dir), loaded, model))
     model = solver.model
     advance(solver, 20)
     n, t, dt = solver.n, solver.t, 0.0  # module docstring: the history stays as it is
@@ -75,5 +75,7 @@ def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:
 if __name__ == "__main__":
     try:
         main(sys.argv[1], sys.argv[2], *map(int, sys.argv[3:5]))
-    except typer.Exit as stop:  # the scene or checkpoint was refused; the reason is printed
+    except typer.Exit as stop:  # the scene was refused; the reason is printed
         sys.exit(stop.exit_code)
+    except InputError as exc:  # the checkpoint was refused
+        sys.exit(f"tidem: {exc}")

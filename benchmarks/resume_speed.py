@@ -16,8 +16,8 @@ from pathlib import Path
 import typer
 
 from tidem.bench import profile_scene
-from tidem.cli import _checkpoint
 from tidem.cli_common import build_or_exit, load_scene
+from tidem.launch import InputError, load_checkpoint
 from tidem.runtime import ensure_taichi
 
 
@@ -25,7 +25,7 @@ def main(scene: str, run_dir: str, steps: int = 2000, threads: int = 2) -> None:
     loaded = load_scene(scene, [])
     ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
     model = build_or_exit(loaded)
-    r = profile_scene(loaded, steps, 100, model, _checkpoint(Path(run_dir), loaded, model), split=False)
+    r = profile_scene(loaded, steps, 100, model, load_checkpoint(Path(run_dir), loaded, model), split=False)
     print(f"{scene}: {r['particles']} particles, {steps} steps, {threads} threads: "
           f"{1e3 * r['wall_s'] / steps:.3f} ms per step, {r['particle_steps_per_s']:.3g} particle-steps/s")
 
@@ -33,5 +33,7 @@ def main(scene: str, run_dir: str, steps: int = 2000, threads: int = 2) -> None:
 if __name__ == "__main__":
     try:
         main(sys.argv[1], sys.argv[2], *map(int, sys.argv[3:5]))
-    except typer.Exit as stop:  # the scene or checkpoint was refused; the reason is printed
+    except typer.Exit as stop:  # the scene was refused; the reason is printed
         sys.exit(stop.exit_code)
+    except InputError as exc:  # the checkpoint was refused
+        sys.exit(f"tidem: {exc}")

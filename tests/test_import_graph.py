@@ -1,6 +1,7 @@
 """The package's import graph (read with ast, nothing imported or compiled): no module imports
 itself back through others, scene validation (tidem/scene/) stands on nothing above it, and
-the kernels (kernels/, installed as tidem.kernels) import nothing of tidem outside kernels/.
+the kernels (kernels/, installed as tidem.kernels) import nothing of tidem outside kernels/, and
+every name a script of benchmarks/ imports from tidem exists (no test runs those scripts).
 
 Imports inside functions count like those at the top of a module: a lazy import only moves
 the moment a cycle bites, it does not take the dependency away."""
@@ -96,3 +97,38 @@ def test_the_graph_sees_lazy_and_relative_imports():
     assert "tidem.scene.observable_names" in graph["tidem.scene.schema"]  # inside a validator
     assert "tidem.kernels.geometry" in graph["tidem.kernels.broadphase"]  # `from .geometry import`
     assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+
+
+def top_level_names(path: Path) -> set[str]:
+    """Names a module defines or imports at its top level (functions, classes, assignments, imports)."""
+    names = set()
+    for node in ast.parse(path.read_text(), str(path)).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names |= {(alias.asname or alias.name).split(".")[0] for alias in node.names}
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            for target in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                names |= {n.id for n in ast.walk(target) if isinstance(n, ast.Name)}
+    return names
+
+
+def missing_benchmark_imports() -> list[str]:
+    """`script: from module import name` for each name a benchmark script imports from tidem that the
+    module neither defines nor has as a submodule."""
+    files = modules()
+    missing = []
+    for script in sorted((ROOT / "benchmarks").rglob("*.py")):
+        for node in ast.walk(ast.parse(script.read_text(), str(script))):
+            if not isinstance(node, ast.ImportFrom) or not (node.module or "").startswith("tidem"):
+                continue
+            defined = top_level_names(files[node.module]) if node.module in files else set()
+            missing += [f"{script.relative_to(ROOT)}: from {node.module} import {alias.name}" for alias in node.names
+                        if alias.name not in defined and f"{node.module}.{alias.name}" not in files]
+    return missing
+
+
+def test_benchmark_scripts_import_what_exists():
+    """kernel_repeat.py and resume_speed.py imported `tidem.cli._checkpoint` after it had moved
+    (tidem.launch.load_checkpoint): found only by running them."""
+    assert missing_benchmark_imports() == []
