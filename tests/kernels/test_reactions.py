@@ -247,6 +247,21 @@ def test_growing_particle_gains_the_polymer_it_makes(solver_for):
     assert s.state.rsum.to_numpy()[REACTED] == made, "a particle at max_diameter no longer reacts"
 
 
+def test_slowly_growing_particle_keeps_its_density(solver_for):
+    """k p_M = 9e-3 /s: the mass grows by 9e-6 a step, just below where the radius follows the mass by
+    the cube root's series (`kernels/reactions.py`) instead of pow; after 1000 steps d = d_0 (m/m_0)^(1/3)
+    to the rounding of 1000 products (a wrong x^2 coefficient would be 1e-9 off)."""
+    raw = poly_scene(0.0)
+    raw["reactions"][0].update(rate_constant=9e-9, growth=True, max_diameter=1.05e-3)
+    s = solver_for(raw)
+    m0 = s.model.mass[0]
+    for _ in range(1000):
+        s.step()
+    m, r = s.state.mass.to_numpy()[0], s.state.radius.to_numpy()[0]
+    assert m == pytest.approx(m0 * (1 + 9e-6) ** 1000, rel=1e-12)
+    assert 2 * r == pytest.approx(1e-3 * (m / m0) ** (1 / 3), rel=1e-12)
+
+
 def test_growing_particles_find_each_other(solver_for):
     """Two fixed particles 0.3 d_0 apart, beyond the neighbour skin (0.1 d_max): growth alone
     must trigger the rebuilds that put them in each other's list before they touch."""
