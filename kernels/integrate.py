@@ -22,7 +22,8 @@ from .ordered import raise_max
 
 
 def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: int = 0, foil: bool = False,
-                     growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None):
+                     growth: bool = False, wall_foil: bool = False, n_planes: int = 0, before_kick=(), forces=None,
+                     react=None):
     """Return the kernels (kick_drift(n, dt), kick(n, t, dt, drift), forces_and_kick(n, t, dt, conduct,
     diag, drift, kick)). Each leaves in S.max_disp[None] the largest squared displacement since the last neighbour build
     (for `kick` and `forces_and_kick` that after the next step's kick-drift when drift = 1, else 0;
@@ -32,6 +33,10 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     `before_kick`: Taichi funcs f(i, t) that finish particle i's force, torque and heat flow
     (the gas forces, the contact times); `kick` calls them on each particle first, which saves a
     kernel launch and a pass over the particles per step.
+    `react`: the reactions that run in the kick (`in_kick` of `kernels/reactions.make_reaction_kernel`,
+    polymerization): each reacting particle reacts after `before_kick`, just before its kick, as the
+    separate reaction kernel would between the forces and the kick, and the kernel hands the reactions'
+    totals over after its particle loop.
     `forces`: the contact passes of `kernels/contact.make_force_kernel`; `forces_and_kick` runs
     them and kicks each particle as soon as its sums are complete, in the second pass, so that a
     step is two passes over the particles in one kernel launch (None without `forces`); with kick
@@ -51,6 +56,7 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     once, the surfaces' delivered heat E_s grows by m dt q_s, and the foils take the held Q each step,
     so the energies agree after every m steps."""
     min_image, wrap, _cc, _cid = make_geometry(grid)
+    reacts = react is not None
 
     fp = ti.lang.impl.current_cfg().default_fp
     bits = ti.i64 if fp == ti.f64 else ti.i32
@@ -134,6 +140,9 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         for finish in ti.static(before_kick):
             finish(i, t)
         if kick:
+            if ti.static(reacts):
+                if S.rx[i] >= 0:
+                    react.particle(i, t, dt, 0)
             # plain stores: i may come from a slab list, and Taichi makes `S.v[i] += ...` with such an
             # index an atomic (`kernels/contact.py`, add)
             S.v[i] = S.v[i] + 0.5 * dt * S.f[i] * S.inv_mass[i]
@@ -150,6 +159,8 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
         for i in range(n):
             if S.active[i]:
                 raise_max(S.max_disp, kick_particle(i, t, dt, drift, 1))
+        if ti.static(reacts):
+            react.hand_over(n)
         advance_surfaces(dt)
 
     if forces is None:
@@ -161,6 +172,8 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
     def forces_and_kick(n: ti.i32, t: float, dt: float, conduct: ti.i32, diag: ti.i32, drift: ti.i32, kick: ti.i32):
         passes_and_kick(n, t, dt, conduct, diag, drift, kick)  # (which zeroes S.max_disp once it has read it)
         if kick:
+            if ti.static(reacts):
+                react.hand_over(n)
             advance_surfaces(dt)
 
     return kick_drift, kick, forces_and_kick

@@ -48,6 +48,7 @@ last step of a particle's life is clamped to what it has left.
 """
 
 import math
+from types import SimpleNamespace
 
 import taichi as ti
 
@@ -69,11 +70,17 @@ def booked_slots(kinds) -> list[int]:
 
 def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float = 1.0, mu: float = 1.0,
                          W: int = 1):
-    """Return `react(n, t, dt, steps_left)` for the reactions of `tidem.reactions.reaction_constants`."""
+    """Return `react(n, t, dt, steps_left)` for the reactions of `tidem.reactions.reaction_constants`
+    (a kernel), and `in_kick` where no reaction removes a particle (polymerization): the Taichi funcs
+    particle(i, t, dt, steps_left), which the kick calls on each reacting particle after its forces are
+    complete, and hand_over(n), which the kick's kernel calls after its particle loop, so that the
+    step needs neither a launch nor a pass of its own for the reactions (`kernels/integrate.py`)."""
     gas = G is not None
     ordered = in_order()
     timing = any(r["kind"] == SUBL for r in reactions)
     burning = any(r["kind"] == CHAR for r in reactions)
+    removes = any(r["kind"] in (CHAR, SUBL) for r in reactions)  # (burnt out, sublimated or escaped)
+    deposits = gas and removes  # only these book anything for the gas cells (`gas_book`)
     slots = booked_slots(r["kind"] for r in reactions)
     if gas:
         cic, corner, weight, corners = make_cic(gg)
@@ -263,22 +270,26 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
     makers = {CHAR: make_char, POLY: make_poly, SUBL: make_subl}
     steps = [makers[rc["kind"]](rc) for rc in reactions]
 
-    @ti.kernel
-    def react(n: ti.i32, t: ti.f64, dt: ti.f64, steps_left: ti.i32) -> ti.i32:
-        """Advance every reacting particle by dt; returns the number of particles removed."""
+    @ti.func
+    def react_particle(i, t, dt, steps_left):
+        """Advance reacting particle i by dt; returns 1 if it was removed."""
         removed = 0
-        for i in range(n):
-            if S.active[i] and S.rx[i] >= 0:
-                if ti.static(timing):
-                    if S.rt0[i] < 0.0:
-                        S.rt0[i] = t
-                T = S.T[i]
-                m = S.mass[i]
-                c = 1.0 / (S.inv_heat_cap[i] * m)  # specific heat [J/(kg K)]
-                for k in ti.static(range(len(steps))):
-                    if S.rx[i] == k:
-                        removed += steps[k](i, t, dt, steps_left, T, m, c)
-        if ti.static(gas or ordered):
+        if ti.static(timing):
+            if S.rt0[i] < 0.0:
+                S.rt0[i] = t
+        T = S.T[i]
+        m = S.mass[i]
+        c = 1.0 / (S.inv_heat_cap[i] * m)  # specific heat [J/(kg K)]
+        for k in ti.static(range(len(steps))):
+            if S.rx[i] == k:
+                removed += steps[k](i, t, dt, steps_left, T, m, c)
+        return removed
+
+    @ti.func
+    def hand_over(n):
+        """After every particle has reacted: on the CPU the ledger rows added up in particle order (the
+        same totals whatever the thread count), and what the particles booked for their gas cells."""
+        if ti.static(deposits or ordered):
             if ti.static(ordered):
                 ti.loop_config(serialize=True)  # particle order, whatever the thread count
             for i in range(n):
@@ -287,13 +298,25 @@ def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float
                         for k in ti.static(range(len(slots))):
                             S.rsum[slots[k]] += S.rbook[i][k]
                             S.rbook[i][k] = 0.0
-                if ti.static(gas):
+                if ti.static(deposits):
                     booked = S.gas_book[i]
                     if booked[0] != 0.0 or booked[1] != 0.0:
                         if ti.static(burning):
                             take_o2(S.x[i], booked[0])
                         deposit(G.Qs, S.x[i], booked[1])
                         S.gas_book[i] = ti.Vector([0.0, 0.0])
+
+    @ti.kernel
+    def react(n: ti.i32, t: ti.f64, dt: ti.f64, steps_left: ti.i32) -> ti.i32:
+        """Advance every reacting particle by dt; returns the number of particles removed."""
+        removed = 0
+        for i in range(n):
+            if S.active[i] and S.rx[i] >= 0:
+                removed += react_particle(i, t, dt, steps_left)
+        hand_over(n)
         return removed
 
-    return react
+    in_kick = None
+    if not removes:
+        in_kick = SimpleNamespace(particle=react_particle, hand_over=hand_over)
+    return SimpleNamespace(react=react, in_kick=in_kick)

@@ -32,12 +32,14 @@ import taichi as ti
 # cell order before every numerics.sort_interval-th neighbour build (`tidem.storage_order`);
 # "contact forces": the two passes in which each pair's owner evaluates the contact for both
 # particles (and the walls and tubes); "kick": the
-# second half kick, which in scenes without reactions also adds the gas forces, and between
+# second half kick, which (unless a reaction can remove particles) also adds the gas forces and the
+# reactions, and between
 # outputs the next step's kick-drift (one kernel,
 # `tidem.solver`: "kick-drift" then counts only the first step after each output); "forces and
-# kick": the two in one kernel launch, as a run without reactions takes them (`tidem bench
+# kick": the two in one kernel launch, as such a run takes them (`tidem bench
 # --profile` runs them as kernels of their own to tell them apart); "gas coupling": voidage, drag and heat
-# exchange coefficients at each gas step (and the gas forces, with reactions).
+# exchange coefficients at each gas step (and the gas forces, where reactions can remove particles);
+# "reactions": their own kernel, only where they can remove particles.
 PHASES = ("kick-drift", "storage sort", "neighbour build", "contact forces", "gas coupling", "gas flow", "pressure solve",
           "reactions", "inflow and outflow", "kick", "forces and kick", "checks", "output")
 clock = time.perf_counter

@@ -6,8 +6,9 @@ every `numerics.sort_interval` rebuilds first a re-sort of particle storage into
 (`tidem.storage_order`), a gas step every `gas.coupling_interval` steps (scenes with gas),
 forces (contacts, with the conduction every `heat.conduction_interval` steps, then drag and
 pressure-gradient force), reactions (with a rebuild when a
-particle burnt out or left), kick. Without reactions the contact passes and the kick (which
-adds the gas forces first) are one kernel launch (`forces_and_kick`), and `advance(k)`, which the run loop calls between
+particle burnt out or left), kick. Unless a reaction can remove particles (char combustion,
+sublimation), the contact passes and the kick (which adds the gas forces and lets each particle
+react first) are one kernel launch (`forces_and_kick`), and `advance(k)`, which the run loop calls between
 outputs, has each kick go on with the next step's kick-drift: a step is then one kernel launch
 (plus the gas step and the neighbour build when due), bit for bit the same as k calls of
 `step()` and as separate kernels (`split_passes`, which `tidem bench --profile` sets).
@@ -130,21 +131,30 @@ class Solver(TallyReads):
         return forces
 
     def _build_integrators(self, forces) -> None:
-        """Kick-drift and kick (`kernels/integrate.py`). Without reactions (which act between the
-        forces and the kick) the kick also adds the gas forces and runs in the contact passes' launch."""
-        model, f = self.model, self.model.features
-        self._fused = not f.reactions
+        """Kick-drift and kick (`kernels/integrate.py`), and the reactions (`kernels/reactions.py`, coupled
+        to the gas grid when there is one). Unless a reaction may remove particles (which the host must
+        learn of between the forces and the kick), the kick also adds the gas forces, lets each particle
+        react, and runs in the contact passes' launch."""
+        model, f, S = self.model, self.model.features, self.state
+        self._react = in_kick = None
+        if f.reactions:
+            G = self.gas.G if self.gas is not None else None
+            gas = model.scene.gas
+            reactions = make_reaction_kernel(model.reaction_constants, S, self.gas.gg if G else None, G,
+                                             gas.density if gas else 1.0, gas.viscosity if gas else 1.0,
+                                             model.wall_slots)
+            self._react, in_kick = reactions.react, reactions.in_kick
+        self._fused = not f.reactions or in_kick is not None
         self._forces = hot(forces.forces)
         finish = (forces.finish,) if forces.finish is not None else ()
         if self._fused and self.gas:
             finish += (self.gas.force,)
-        kernels = make_integrators(model.grid, self.state, f.heat, f.n_planes + f.n_tubes + f.n_meshes, model.angle_bins, f.foil,
-                                   f.growth, f.wall_foil, f.n_planes, finish, forces if self._fused else None)
+        kernels = make_integrators(model.grid, S, f.heat, f.n_planes + f.n_tubes + f.n_meshes, model.angle_bins, f.foil,
+                                   f.growth, f.wall_foil, f.n_planes, finish, forces if self._fused else None, in_kick)
         self._kick_drift, self._kick, self._forces_and_kick = (hot(k) if k is not None else None for k in kernels)
 
     def _build_sources_and_sinks(self) -> None:
-        """Outlet recycling (`kernels/outlet.py`), pours (`tidem.pour`) and reactions
-        (`kernels/reactions.py`, coupled to the gas grid when there is one)."""
+        """Outlet recycling (`kernels/outlet.py`) and pours (`tidem.pour`)."""
         model, f, S = self.model, self.model.features, self.state
         self._recycle = None
         if f.recycle:
@@ -153,13 +163,6 @@ class Solver(TallyReads):
         elif f.sink:
             self._recycle = make_sink_kernel(model.scene.outlet.height, model.wall_slots, S)
         self.pourer = Pourer(model, S) if model.pours else None
-        self._react = None
-        if f.reactions:
-            G = self.gas.G if self.gas is not None else None
-            gas = model.scene.gas
-            self._react = make_reaction_kernel(model.reaction_constants, S, self.gas.gg if G else None, G,
-                                               gas.density if gas else 1.0, gas.viscosity if gas else 1.0,
-                                               model.wall_slots)
 
     def start(self) -> None:
         """First neighbour build and force evaluation (so that step() can begin with a kick)."""
