@@ -1,5 +1,6 @@
 """Reacting particles: char combustion, polymerization heat and sublimation (one kernel, run
-every DEM step after the forces and the gas exchange, before the kick that advances T).
+every DEM step after the forces and the gas exchange, before the kick that advances T; where no
+reaction can remove a particle, as in polymerization, the kick runs the same code itself).
 
 Char combustion (source 1: R_p = k exp(-E/(R T_p)) ... with the sign fixed; kinetics of
 Field 1969, Combust. Flame 13, 237: k_s = 8710 exp(-17967 K / T_p) g/(cm^2 s atm) =
