@@ -169,8 +169,12 @@ class GasPhase:
         if self.species:
             self._species(dt, self.y_in)
             if self.G.bsum[2] < 0.0:
+                Y = self.G.Y.to_numpy()
+                worst = np.unravel_index(np.argmin(Y), Y.shape)
+                at = ", ".join(f"{v:.4g}" for v in self.gg.center(worst))
                 raise GasError(
-                    f"the particles took more O2 from a gas cell than it held within one gas step at t = {t:.6g} s: "
+                    f"the particles took more O2 from a gas cell than it held within one gas step at t = {t:.6g} s "
+                    f"(the cell centred at ({at}) m, O2 mass fraction {Y[worst]:.3g} after the step): "
                     f"lower gas.coupling_interval (now {self.interval}) or numerics.dt")
         self.divergence = f["divergence"](dt)
         start = lap("gas flow", start)

@@ -5,6 +5,7 @@ contact, polymerization heat against the lumped ODE, sublimation against the d^2
 sublimating cloud that cools its gas by exactly the heat it takes."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from tests.conftest import make_scene
 from tidem.reactions import (ENTHALPY_OUT, GONE, H_CO, H_CO2, HEAT_RELEASED, LATENT, M_C, M_O2, O2_USED, R_GAS,
                              REACTED)
 from tidem.scene.errors import SceneError
+from tidem.solver import RunError
 
 T_BED, RHO_G, MU_G, CP_G, K_G = 1123.0, 0.315, 4.5e-5, 1150.0, 0.07
 D_O2, X_O2, P = 2.0e-4, 0.21, 101325.0
@@ -153,6 +155,21 @@ def test_burning_cloud_takes_the_same_oxygen_on_every_run(solver_for):
     assert runs[0][1].min() < runs[0][1].max(), "the char must burn"
     for a, b in zip(*runs):
         assert np.array_equal(a, b)
+
+
+def test_a_cell_emptied_within_one_gas_step_is_refused_by_name(solver_for):
+    """The same cloud with a gas step of 10 DEM steps: its 422 chars a cell, film-limited, would take
+    several times the O2 their cell holds before the gas step sees it (the take is explicit); the run
+    stops with the cell's position and the setting that shortens the gas step, not with negative O2."""
+    ticks = (np.arange(15) + 0.5) * 0.008 / 15
+    pos = np.stack(np.meshgrid(ticks, ticks, ticks, indexing="ij"), axis=-1).reshape(-1, 3).tolist()
+    s = solver_for(char_scene(pos, d=4e-4, reaction={"pre_exponential": 1e3}, gas={"coupling_interval": 10}))
+    with pytest.raises(RunError) as stop:
+        for _ in range(40):
+            s.step()
+    message = str(stop.value)
+    assert "took more O2 from a gas cell" in message and "gas.coupling_interval (now 10)" in message
+    assert re.search(r"the cell centred at \(0\.00[26], 0\.00[26], 0\.00[26]\) m", message), message
 
 
 def test_burnt_out_particle_disappears_cleanly(solver_for):
