@@ -143,7 +143,9 @@ class Solver(TallyReads):
             reactions = make_reaction_kernel(model.reaction_constants, S, self.gas.gg if G else None, G,
                                              gas.density if gas else 1.0, gas.viscosity if gas else 1.0,
                                              model.wall_slots)
-            self._react, in_kick = reactions.react, reactions.in_kick
+            in_kick = reactions.in_kick
+            if in_kick is None:  # else the kick reacts, and the kernel of its own is never launched
+                self._react = reactions.react
         self._fused = not f.reactions or in_kick is not None
         self._forces = hot(forces.forces)
         finish = (forces.finish,) if forces.finish is not None else ()
