@@ -35,7 +35,7 @@ def scene(
     path: Annotated[Optional[str], typer.Argument(help="Scene file, or the name of a shipped scene (default: the default scene)")] = None,
     out: Annotated[Optional[Path], typer.Option(help="Output folder (default renders/<scene name>)")] = None,
     smoke: Annotated[bool, typer.Option(help="Run only output.smoke_steps steps of the scene (CI)")] = False,
-    t_end: Annotated[Optional[float], typer.Option("--t-end", help="End time [s], overrides numerics.t_end")] = None,
+    t_end: Annotated[Optional[float], typer.Option("--t-end", help="End time in s, overrides numerics.t_end")] = None,
     set_: Sets = None,
     arch: Annotated[str, typer.Option(help="Taichi backend: cpu, cuda, vulkan or auto")] = "cpu",
     quiet: Annotated[bool, typer.Option(help="No progress bar")] = False,
@@ -123,7 +123,7 @@ def render(
     field: Annotated[Optional[str], typer.Option(help="speed, temperature, radius, group or contacts")] = None,
     range_: Annotated[Optional[str], typer.Option("--range", help="Colour range LOW,HIGH")] = None,
     view: Annotated[Optional[str], typer.Option(help="front, side, top or iso")] = None,
-    slice_: Annotated[Optional[float], typer.Option("--slice", help="Show only a mid-depth slice this thick [m]")] = None,
+    slice_: Annotated[Optional[float], typer.Option("--slice", help="Show only a mid-depth slice this thick, in m")] = None,
     gif: Annotated[bool, typer.Option(help="Also write a GIF")] = False,
 ):
     """Re-render frames and the movie of a finished run from its snapshots, with other settings."""
@@ -190,30 +190,77 @@ def check(
     lines = [
         f"scene: {model.name} ({loaded.source})",
         f"particles: {int(model.active0.sum())} at start, {model.capacity} in all, total mass {mass:.4g} kg",
-        f"diameter: {2 * model.radius.min():.4g} .. {2 * model.radius.max():.4g} m",
+        f"{'parcel diameter' if f.coarse_grain else 'diameter'}: {2 * model.radius.min():.4g} .. "
+        f"{2 * model.radius.max():.4g} m" + (f" (grains {2 * float((model.radius / model.coarse_grain).min()):.4g} .. "
+                                               f"{2 * float((model.radius / model.coarse_grain).max()):.4g} m)"
+                                               if f.coarse_grain else ""),
         *([f"coarse graining: parcels of k^3 grains, k = {', '.join(f'{k:g}' for k in np.unique(model.coarse_grain))}; "
            f"{float((model.coarse_grain**3).sum()):.0f} grains"] if f.coarse_grain else []),
         f"contact law: {loaded.scene.contact.model}; rolling resistance: {'on' if f.rolling else 'off'}",
         f"Rayleigh time {sc.rayleigh:.4g} s, contact time {sc.contact:.4g} s, stability limit {sc.limit:.4g} s"
-        + (" (does not bind: every particle is fixed)" if model.fixed.all() else ""),
-        f"time step: {model.dt:.4g} s ({model.t_end / model.dt:.3g} steps to t_end = {model.t_end:g} s)",
+        + (" (does not bind: every particle is fixed)" if model.fixed.all() else "")
+        + ("" if f.contacts else " (does not bind: no contacts)"),
+        f"time step: {model.dt:.4g} s ({model.t_end / model.dt:.3g} steps to t_end = {model.t_end:g} s); "
+        f"precision: {loaded.scene.numerics.precision}",
         *([f"conduction: every {loaded.scene.heat.conduction_interval} step(s); explicit limit {model.thermal_limit:.4g} s "
            f"(heat.conduction_interval up to {min(int(model.thermal_limit / model.dt), MAX_CONDUCTION_INTERVAL)})"] if model.thermal_limit else []),
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
         *([gas_line(model)] if f.gas else []),
         *report_lines(model.meshes, model.mesh_table, 2 * float(model.radius.min())),
         *(model.gas_cut.report_lines() if model.gas_cut is not None else []),
-        f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; skin {model.skin:.3g} m",
+        (f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; "
+         f"skin {model.skin:.3g} m" if f.contacts else "grid: none (no contacts, no neighbour search)"),
         f"kernels: {', '.join(f.kernels())}",
         f"memory (fields): {format_bytes(model.memory_bytes())}, {model.memory_bytes() / model.capacity:.0f} B/particle; "
         f"expected peak of a run {format_bytes(model.peak_memory_bytes())}",
         f"output: {snapshots} snapshots, about {format_bytes(with_frames)} on disk with frames "
         f"({format_bytes(without)} with --no-render)",
     ]
+    if f.gas:
+        lines += gas_notes(model)
+    lines += output_notes(model, snapshots)
     typer.echo("\n".join(lines))
     from tidem.launch import passage_notes
 
     passage_notes(loaded.scene, "note: ", typer.echo)
+
+
+def output_notes(model, snapshots: int) -> list[str]:
+    """`tidem check`'s notes on output that will not be what the scene asks (at most one snapshot a step;
+    an interval beyond t_end) and on a run of more than LONG_RUN steps."""
+    import math
+
+    out = model.scene.output
+    steps = math.ceil(model.t_end / model.dt)
+    asked = out.snapshots if out.interval is None else math.floor(model.t_end / out.interval + 1e-9)
+    notes = []
+    if asked > steps:
+        notes.append(f"note: {asked} snapshots asked for, but a run writes at most one a step: {snapshots} in "
+                     f"{steps} steps")
+    if out.interval is not None and out.interval > model.t_end:
+        notes.append(f"note: output.interval ({out.interval:g} s) is longer than t_end ({model.t_end:g} s): only "
+                     "the snapshot at t = 0 is written (the final state is in checkpoint.npz)")
+    if steps > LONG_RUN:
+        notes.append(f"note: {steps:.3g} steps to t_end: at 1e7 particle-steps/s (2 CPU cores) about "
+                     f"{steps * model.capacity / 1e7 / 86400:.3g} days; check numerics.dt and numerics.t_end")
+    return notes
+
+
+LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
+
+
+def gas_notes(model) -> list[str]:
+    """`tidem check`'s notes on a gas grid too coarse to resolve the bed: fewer than 3 cells up, or one
+    cell across a walled axis."""
+    from tidem.gas_geometry import gas_grid
+
+    gg = gas_grid(model.scene)
+    size = model.scene.gas.cell_size
+    notes = [f"note: the gas grid has {gg.cells[2]} cell(s) up, so it does not resolve the bed's height; a smaller "
+             f"gas.cell_size (now {size:g} m)"] if gg.cells[2] < 3 else []
+    notes += [f"note: the gas grid has one cell across {'xy'[a]} between walls, so the gas flow does not resolve "
+              f"it; a smaller gas.cell_size (now {size:g} m)" for a in range(2) if gg.cells[a] == 1 and not gg.periodic[a]]
+    return notes
 
 
 def gas_line(model) -> str:

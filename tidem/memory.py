@@ -175,7 +175,8 @@ def scene_items(scene) -> list[Item]:
             items.append(Item(f"the {format_count(sites)} lattice sites of the fill of {key}.region "
                               f"(diameter {d:g} m)", sites * LATTICE_BYTES_PER_SITE, f"{key}.diameter",
                               "use larger particles or a smaller region"))
-        n = parcel_count(g) or sites
+        n = parcel_count(g)
+        n = sites if n is None else n
         counts.append((float(n), f"{key}.count" if g.count is not None else f"{key}.region", key))
     fill = {k: f"use fewer particles (the most are in {k}: a smaller region, larger particles or a 'count')"
             for _, r, k in counts if r.endswith(".region")}

@@ -87,7 +87,23 @@ def run_check(path, *extra):
         (lambda r: r["domain"].update(max=[0.05, 0.2, -0.06]),
          "domain: max[2] must be greater than min[2]"),
         (lambda r: r.update(particles=[]),
-         "particles: list should have at least 1 item"),
+         "particles: needs at least 1 item (got the list [])"),
+        (lambda r: r["particles"][0].update(positions=[], velocities=[]),
+         "particles[0]: 'positions' is empty: give at least one [x, y, z], or remove the group"),
+        (lambda r: r["particles"][0].update(fixed="yes"),
+         "particles[0].fixed: expected true or false, got 'yes'; write true or false (no quotes)"),
+        (lambda r: r["particles"][0].update(fixed=1),
+         "particles[0].fixed: expected true or false, got 1"),
+        (lambda r: r["particles"][0].update(seed=True),
+         "particles[0].seed: expected a whole number, got true"),
+        (lambda r: r["particles"][0].update(coarse_grain=True),
+         "particles[0].coarse_grain: expected a number, got true"),
+        (lambda r: r.update(output={"snapshots": "40"}),
+         "output.snapshots: expected a number, got the text '40'"),
+        (lambda r: r.update(reactions=[{"type": "burn"}]),
+         "reactions[0]: type must be one of char_combustion, polymerization, sublimation (got 'burn')"),
+        (lambda r: r.update(reactions=[{"rate": 1.0}]),
+         "reactions[0]: type must be one of char_combustion, polymerization, sublimation (got nothing)"),
         (lambda r: r.update(outlet={"type": "moving_plate", "speed": 0.01}),
          "outlet.stop_height: -0.05 is not below the plate's start height -0.05"),
         (lambda r: r.pop("heat"),
@@ -162,6 +178,22 @@ def test_set_override_is_validated():
     assert result.exit_code == 0, result.output
 
 
+def test_set_one_past_the_last_item_adds_one():
+    from tidem.scene.load import apply_override
+
+    raw = {"walls": []}
+    apply_override(raw, "walls[0].point=[0.0, 0.0, -0.04]")
+    apply_override(raw, "walls[0].normal=[0, 0, 1]")
+    apply_override(raw, "walls[1]={ point = [0.0, 0.0, 0.04], normal = [0, 0, -1] }")
+    assert raw["walls"] == [{"point": [0.0, 0.0, -0.04], "normal": [0, 0, 1]},
+                            {"point": [0.0, 0.0, 0.04], "normal": [0, 0, -1]}]
+    with pytest.raises(ValueError, match=r"index 3 is out of range \(walls has 2 items, \[0\] to \[1\]; \[2\] adds"):
+        apply_override(raw, "walls[3].point=[0, 0, 0]")
+    result = runner.invoke(app, ["check", "sphere_impact", "--set", "walls[0].point=[0.0, 0.0, -0.04]",
+                                 "--set", "walls[0].normal=[0, 0, 1]"])
+    assert result.exit_code == 0 and "walls: walls[0]; tubes: 0" in result.output, result.output
+
+
 def test_unknown_scene_name_lists_shipped():
     result = runner.invoke(app, ["check", "no_such_scene"])
     assert result.exit_code == 2
@@ -199,3 +231,18 @@ def test_a_shipped_name_is_found_beside_an_output_folder_of_that_name(tmp_path, 
     (tmp_path / "sphere_impact" / "mine.toml").write_text("")
     with pytest.raises(SceneError, match="mine.toml"):
         resolve("sphere_impact")
+
+
+def test_check_notes_what_a_run_would_not_do_as_asked():
+    """Output asked beyond one snapshot a step or past t_end, a run of 1e12 steps, a gas grid of one cell
+    up: each gets a note (exit 0: the scene is valid)."""
+    for sets, note in ((["output.snapshots=100000000"], "note: 100000000 snapshots asked for, but a run writes at "
+                        "most one a step: 1122 in 1121 steps"),
+                       (["output.interval=10.0"], "note: output.interval (10 s) is longer than t_end (0.0012 s)"),
+                       (["numerics.dt=1e-15", "numerics.force_dt=true"], "note: 1.2e+12 steps to t_end")):
+        result = runner.invoke(app, ["check", "sphere_impact", *[a for s in sets for a in ("--set", s)]])
+        assert result.exit_code == 0 and note in result.output, result.output
+    result = runner.invoke(app, ["check", "char_combustion", "--set", "gas.cell_size=10.0"])
+    assert result.exit_code == 0 and "note: the gas grid has 1 cell(s) up" in result.output, result.output
+    assert "note: the gas grid has one cell across x between walls" in result.output
+    assert "note:" not in runner.invoke(app, ["check", "char_combustion"]).output

@@ -148,7 +148,7 @@ CORPUS = [
     ("set into a list without index", TINY, ["check", FILE, "--set", "particles.count=3"], "particles",
      "write particles[0].count"),
     ("set index out of range", TINY, ["check", FILE, "--set", "particles[3].count=3"], "particles[3].count",
-     "[0] to [0]"),
+     "[0] to [0]; [1] adds an item"),
     ("set without value", TINY, ["check", FILE, "--set", "numerics.t_end"], "--set", "expected KEY=VALUE"),
     ("set empty key", TINY, ["check", FILE, "--set", "=3"], "--set", "write KEY=VALUE"),
     ("set with unit", TINY, ["check", FILE, "--set", "numerics.t_end=1s"], "numerics.t_end", "units are SI: write 1"),

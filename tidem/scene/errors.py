@@ -119,6 +119,18 @@ def _unwrap(cls: Any) -> Any:
     return cls
 
 
+def _tag_message(path: str, ctx: dict, value: Any) -> str:
+    """A table of a tagged union (a diameter's `distribution`, a reaction's `type`) with a missing or
+    unknown tag: the key, what it may be and what it was."""
+    key = str(ctx.get("discriminator", "'type'")).strip("'")
+    options = {"distribution": "mono, uniform, normal, lognormal",
+               "type": "char_combustion, polymerization, sublimation"}.get(key)
+    if ctx.get("expected_tags"):
+        options = ", ".join(t.strip().strip("'") for t in str(ctx["expected_tags"]).split(","))
+    got = value.get(key) if isinstance(value, dict) else value
+    return f"{path}: {key} must be one of {options} (got {'nothing' if got is None else repr(got)})"
+
+
 def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list[str]:
     """One message per pydantic error, each naming the key path and the fix."""
     lines: list[str] = []
@@ -143,6 +155,9 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
             msg = f"{path}: required key is missing; add it (docs/scenes.md lists every key)"
         elif kind in ("too_long", "too_short") and e["msg"].startswith("Tuple"):
             msg = f"{path}: {'too many' if kind == 'too_long' else 'too few'} numbers (got {value!r}); {_TUPLE_FIX}"
+        elif kind == "too_short":
+            least = e.get("ctx", {}).get("min_length", 1)
+            msg = f"{path}: needs at least {least} item{'s' if least != 1 else ''} (got {_described(value)})"
         elif kind == "tuple_type":
             msg = f"{path}: expected a list of numbers, got {_described(value)}; {_TUPLE_FIX}" + (
                 ", and a list of points as [[x, y, z], [x, y, z]]" if isinstance(loc[-1], int) else "")
@@ -166,7 +181,7 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
         elif kind == "literal_error":
             msg = f"{path}: {e['msg'].lower()} (got {value!r})"
         elif kind in ("union_tag_invalid", "union_tag_not_found"):
-            msg = f"{path}: distribution must be one of mono, uniform, normal, lognormal (got {value.get('distribution') if isinstance(value, dict) else value!r})"
+            msg = _tag_message(path, e.get("ctx", {}), value)
         elif kind == "value_error":
             msg = f"{path}: {str(e.get('ctx', {}).get('error', e['msg']))}"
         else:

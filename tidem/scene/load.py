@@ -123,9 +123,12 @@ def apply_override(raw: dict, assignment: str | tuple[str, Any]) -> None:
         if isinstance(part, int):
             if not isinstance(node, list):
                 raise ValueError(f"--set {key}: {_key_text(parts[:depth]) or 'the scene'} is not a list; drop [{part}]")
-            if part >= len(node):
-                raise ValueError(f"--set {key}: index {part} is out of range ({_key_text(parts[:depth])} has "
-                                 f"{len(node)} item{'s' if len(node) != 1 else ''}, [0] to [{len(node) - 1}])")
+            if part == len(node):  # the next item: a new one, e.g. walls[0].point on a scene without walls
+                node.append(value if last else {} if isinstance(parts[depth + 1], str) else [])
+            elif part >= len(node):
+                have = f"{len(node)} item{'s' if len(node) != 1 else ''}" + (f", [0] to [{len(node) - 1}]" if node else "")
+                raise ValueError(f"--set {key}: index {part} is out of range ({_key_text(parts[:depth])} has {have}; "
+                                 f"[{len(node)}] adds an item)")
         elif not isinstance(node, dict):
             hint = (f"; write {_key_text(parts[:depth])}[0].{part}" if isinstance(node, list)
                     else f"; set {_key_text(parts[:depth])}=VALUE itself")

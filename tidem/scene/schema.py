@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, StrictBool, StrictInt, field_validator, model_validator
 
 from tidem.scene.schema_gas import Gas, Reaction
 from tidem.scene.types import Box, Fraction, NonNegative, Number, Positive, Strict, Vec3
@@ -107,7 +107,7 @@ class ParticleGroup(Strict):
     name: str
     material: str
     diameter: Diameter = Field(discriminator="distribution")
-    count: int | None = Field(default=None, gt=0)
+    count: StrictInt | None = Field(default=None, gt=0)
     region: Box | None = None
     lattice: Literal["cubic", "hexagonal"] = "cubic"
     positions: list[Vec3] | None = None
@@ -115,10 +115,10 @@ class ParticleGroup(Strict):
     velocity: Vec3 = (0.0, 0.0, 0.0)
     velocities: list[Vec3] | None = None
     temperature: Positive | None = None
-    fixed: bool = False
-    seed: int = Field(default=0, ge=0)
-    coarse_grain: float = Field(default=1.0, ge=1.0, le=10.0, allow_inf_nan=False)
-    inside_mesh: int | None = Field(default=None, ge=0)
+    fixed: StrictBool = False
+    seed: StrictInt = Field(default=0, ge=0)
+    coarse_grain: Number = Field(default=1.0, ge=1.0, le=10.0)
+    inside_mesh: StrictInt | None = Field(default=None, ge=0)
 
     @model_validator(mode="before")
     @classmethod
@@ -135,6 +135,8 @@ class ParticleGroup(Strict):
         ways = sum(x is not None for x in (self.region, self.positions, self.pour))
         if ways != 1:
             raise ValueError("give exactly one of 'region' (fill at start), 'positions' or 'pour'")
+        if self.positions == []:
+            raise ValueError("'positions' is empty: give at least one [x, y, z], or remove the group")
         if self.positions is not None and self.count is not None and self.count != len(self.positions):
             raise ValueError(f"count ({self.count}) differs from the number of positions ({len(self.positions)})")
         if self.inside_mesh is not None and self.region is None:
@@ -213,6 +215,7 @@ class Mesh(Strict):
     material: str | None = None
     friction: NonNegative | None = None
     temperature: Positive | None = None
+    convection_length: Positive | None = None
     rotation: MeshRotation | None = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
     surface_velocity: Vec3 = (0.0, 0.0, 0.0)
@@ -262,28 +265,28 @@ class Numerics(Strict):
     t_end: Positive = 1.0
     dt: Positive | None = None
     dt_fraction: Number = Field(default=0.2, gt=0, le=1.0)
-    force_dt: bool = False
+    force_dt: StrictBool = False
     impact_velocity: Positive | None = None
     precision: Literal["float32", "float64", "mixed"] = "float64"
     skin: Number = Field(default=0.1, ge=0.0, le=2.0)
-    max_neighbors: int | None = Field(default=None, ge=4, le=512)
-    max_wall_contacts: int = Field(default=4, ge=1, le=32)
+    max_neighbors: StrictInt | None = Field(default=None, ge=4, le=512)
+    max_wall_contacts: StrictInt = Field(default=4, ge=1, le=32)
     max_overlap: Number = Field(default=0.05, gt=0, le=0.5)
-    check_interval: int = Field(default=100, ge=1)
-    sort_interval: int = Field(default=20, ge=0)
+    check_interval: StrictInt = Field(default=100, ge=1)
+    sort_interval: StrictInt = Field(default=20, ge=0)
 
 
 class Output(Strict):
     """What a run writes and how often."""
 
     interval: Positive | None = None
-    snapshots: int = Field(default=50, ge=1)
+    snapshots: StrictInt = Field(default=50, ge=1)
     timeseries_interval: Positive | None = None
-    smoke_steps: int = Field(default=300, ge=1)
+    smoke_steps: StrictInt = Field(default=300, ge=1)
     checkpoint_wall_s: Positive = 600.0
     checkpoint_interval: Positive | None = None
     profile_times: list[Positive] | None = None
-    profile_bins: int | None = Field(default=None, ge=1)
+    profile_bins: StrictInt | None = Field(default=None, ge=1)
 
 
 MAX_CONDUCTION_INTERVAL = 10000  # heat.conduction_interval: steps between evaluations of the conduction
@@ -297,10 +300,10 @@ class Heat(Strict):
     gas_mean_free_path: NonNegative = 6.8e-8
     roughness: NonNegative = 1e-6
     fluid_layer: Number = Field(default=0.4, ge=0.0, le=1.0)
-    angle_bins: int = Field(default=36, ge=4, le=720)
+    angle_bins: StrictInt = Field(default=36, ge=4, le=720)
     profile_start: NonNegative = 0.0
-    radiation: bool = False
-    conduction_interval: int = Field(default=1, ge=1, le=MAX_CONDUCTION_INTERVAL)
+    radiation: StrictBool = False
+    conduction_interval: StrictInt = Field(default=1, ge=1, le=MAX_CONDUCTION_INTERVAL)
 
 
 class Averaging(Strict):
@@ -310,8 +313,8 @@ class Averaging(Strict):
     interval: Positive | None = None
     cell_size: tuple[Positive, Positive] | None = None
     ring_width: Positive | None = None
-    rings: int = Field(default=3, ge=1, le=100)
-    ring_sectors: int = Field(default=36, ge=4, le=720)
+    rings: StrictInt = Field(default=3, ge=1, le=100)
+    ring_sectors: StrictInt = Field(default=36, ge=4, le=720)
 
 
 class Render(Strict):
@@ -321,10 +324,10 @@ class Render(Strict):
     range: tuple[Number, Number] | None = None
     colormap: str | None = None
     view: Literal["front", "side", "top", "iso"] = "front"
-    height: int = Field(default=720, ge=240, le=2160)
+    height: StrictInt = Field(default=720, ge=240, le=2160)
     slice: Positive | None = None
-    fps: int = Field(default=15, ge=1, le=120)
-    gif: bool = False
+    fps: StrictInt = Field(default=15, ge=1, le=120)
+    gif: StrictBool = False
 
     @model_validator(mode="after")
     def _range(self):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, StrictBool, StrictInt, model_validator
 
 from tidem.scene.types import NonNegative, Number, Positive, Strict
 
@@ -52,10 +52,10 @@ class Gas(Strict):
     voidage: Literal["layered", "cell"] = "layered"
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"
-    conduction: bool = True
-    coupling_interval: int = Field(default=10, ge=1)
+    conduction: StrictBool = True
+    coupling_interval: StrictInt = Field(default=10, ge=1)
     tolerance: Positive = 1e-8
-    max_iterations: int = Field(default=2000, ge=1)
+    max_iterations: StrictInt = Field(default=2000, ge=1)
     min_voidage: Number = Field(default=0.3, gt=0, lt=1)
     pressure_probes: list[Number] = []
     oxygen: Oxygen | None = None
@@ -82,7 +82,7 @@ class Polymerization(Strict):
     activation_energy: NonNegative = 0.0
     reference_temperature: Positive = 353.15
     enthalpy: Positive = 3.34e6
-    growth: bool = False
+    growth: StrictBool = False
     max_diameter: Positive | None = None
 
     @model_validator(mode="after")
