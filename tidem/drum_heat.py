@@ -2,7 +2,9 @@
 
 For every heated mesh, from the time series (second half of the run): the heat flow Q(t) into
 the bed (`meshesK_heat_W`) over the mesh's whole area A and the difference between its temperature
-and the bed's mean temperature, alpha = mean of Q / (A (T_wall - T_bed)).
+and the bed's mean temperature, alpha = mean of Q / (A (T_wall - T_bed)); with gas convection from
+the mesh, its heat flow into the gas (`meshesK_gas_heat_W`) adds gas_alpha over the same A and
+difference to the particles' share.
 
 A rotating mesh (a drum or kiln, axis through `center`) gets more, from the particles at the end:
 - the bed's free surface: the top particle of each slice one mean diameter wide across the drum
@@ -75,6 +77,12 @@ def mesh_heat_rows(model, x: np.ndarray, radius: np.ndarray, series: dict) -> li
         dt = mesh.temperature - t_bed
         row = {"mesh": k, "heat_W": float(np.mean(q)), "area_m2": float(mesh.stats.get("area", np.nan))}
         row["mean_alpha_W_m2K"] = float(np.mean(q / (row["area_m2"] * dt)))
+        if f"meshes{k}_gas_heat_W" in series:  # convection to the gas joins the particles' share
+            q_gas = _late(series, f"meshes{k}_gas_heat_W")
+            row["particles_alpha_W_m2K"] = row["mean_alpha_W_m2K"]
+            row["gas_heat_W"] = float(np.mean(q_gas))
+            row["gas_alpha_W_m2K"] = float(np.mean(q_gas / (row["area_m2"] * dt)))
+            row["mean_alpha_W_m2K"] += row["gas_alpha_W_m2K"]
         if mesh.speed != 0.0 and len(x):
             row.update(_drum(model, mesh, x, radius, q, dt))
         rows.append(row)

@@ -28,7 +28,7 @@ from tidem.kernels.species import make_species_kernel
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas_fields import allocate_gas_fields
 from tidem.gas_mesh import MIN_OPEN
-from tidem.gas_geometry import (gas_grid, gas_walls, inlet_map, sauter_diameter, tube_open_fraction, tube_walls,
+from tidem.gas_geometry import (convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter, tube_open_fraction,
                                  voidage_layers)
 from tidem.gas_limits import MAX_COURANT
 from tidem.phases import PhaseTimer, clock
@@ -69,8 +69,10 @@ class GasPhase:
         self.tol = max(gas.tolerance, 1e-5 if fp == ti.f32 else 0.0)
         self.solid, self.kinds, self.cut = gas_walls(gg, model.tubes, model.meshes, model.gas_cut)
         self.tubes = model.tubes
+        self.heated_meshes = [k for k, m in enumerate(model.meshes) if m.temperature is not None]
         self.inlet = inlet_map(gg, gas)
-        walls = tube_walls(gg, model.tubes) if self.heat and gas.tube_convection != "none" else None
+        walls = convection_walls(gg, model.tubes, model.meshes, self.cut) \
+            if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
         open_fraction = tube_open_fraction(gg, model.tubes, self.solid)
         if self.cut is not None:
@@ -78,7 +80,7 @@ class GasPhase:
                                     MIN_OPEN, 1.0)
         self.layers = voidage_layers(model)
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
-        self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes), self.heat,
+        self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0), self.heat,
                                                  self.sources, self.species, open_fraction, self.layers, self.band)
         G = self.G
         host = {"p": G.p, "gp2": G.gp[2], "eps": G.eps, **{f"u{c}": G.u[c] for c in range(3)}}
@@ -259,6 +261,8 @@ class GasPhase:
             for k, tube in enumerate(self.tubes):
                 if tube["T"] is not None:
                     out[f"tubes{k}_gas_heat_W"] = float(rate[k])
+            for k in self.heated_meshes:
+                out[f"meshes{k}_gas_heat_W"] = float(rate[len(self.tubes) + k])
         return out
 
     def cell_fields(self) -> dict[str, np.ndarray]:

@@ -9,7 +9,8 @@ meshes open (the share of the cell the gas fills, `tidem.gas_mesh`); with heat T
 conductance [W/K]) and HT (H T of the particles [W]); with reactions Qs (heat handed back by
 particles that reacted away [J]); with O2 transport Y and Y_new (mass fraction) and o2_sink
 (O2 consumed since the last gas step [kg]); with gas-tube convection wall_A [m^2], wall_T [K],
-wall_D [m], wall_k (tube index), and per tube wall_rate [W] and wall_energy [J].
+wall_D [m], wall_k (tube index; a heated mesh's: the number of tubes + its index), and per wall
+wall_rate [W] and wall_energy [J].
 Per face, three components [face_shape(c)]: u (velocity [m/s]), us (predictor), A and C (the
 correction's coefficients), gp (pressure gradient [Pa/m]), B and Bv (deposited drag
 coefficients), kind (CLOSED, INTERIOR, INLET, OUTLET). Bottom faces: inlet (superficial
@@ -29,7 +30,7 @@ from tidem.kernels.gas_grid import GasGrid
 
 
 def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarray], walls: dict | None,
-                        n_tubes: int, heat: bool, sources: bool, species: bool, open_fraction: np.ndarray | None = None,
+                        n_walls: int, heat: bool, sources: bool, species: bool, open_fraction: np.ndarray | None = None,
                         layers: int = 1, band: int = 0):
     """Place the fields a scene's gas needs and fill the fixed ones (solid cells, face kinds,
     tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree). With `layers` > 1,
@@ -79,7 +80,7 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         fb.dense(ti.ijk, gg.cells).place(G.wall_k)
         G.wall_rate = ti.field(fp)
         G.wall_energy = ti.field(ti.f64)
-        fb.dense(ti.i, n_tubes).place(G.wall_rate, G.wall_energy)
+        fb.dense(ti.i, n_walls).place(G.wall_rate, G.wall_energy)
     if sources:
         G.bsum = ti.field(ti.f64)
         fb.dense(ti.i, 3).place(G.bsum)

@@ -1,8 +1,8 @@
 """The gas grid of a scene's `[gas]` table, set-up side (plain numpy; the grid's index maths is
 `kernels/gas_grid.py`): cells of about `gas.cell_size`, the cells inside tubes (walls for the
 gas), the kind of every face (closed, interior, inlet at the bottom, outlet at the top), the
-inlet velocity of each bottom face, the tube surface each cell borders (gas-tube convection)
-and the share of each cell outside the tubes. Meshes cut the grid in `tidem.gas_mesh` (blocked
+inlet velocity of each bottom face, the tube (and heated mesh) surface each cell borders (gas-tube
+convection) and the share of each cell outside the tubes. Meshes cut the grid in `tidem.gas_mesh` (blocked
 faces, cells the gas cannot reach, open volume of cut cells); `gas_walls` puts tubes and meshes
 together.
 """
@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas_mesh import MIN_OPEN, GasCut, gas_cut
+from tidem.mesh_convection import wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET
 from tidem.kernels.gas_grid import GasGrid
 
@@ -153,6 +154,31 @@ def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
         return None
     out["wall_A"] = area
     return out
+
+
+def convection_walls(gg: GasGrid, tubes: list[dict], meshes: list, cut: GasCut | None) -> dict[str, np.ndarray] | None:
+    """`tube_walls`, and the heated meshes' wetted surface (`tidem.mesh_convection`) in the cells
+    no tube borders: wall_k = len(tubes) + the mesh's index, wall_D its `convection_length`; a
+    mesh's area in the cells a tube (or an earlier mesh) holds goes to its other cells, so that each
+    mesh keeps its whole wetted area. None without a heated surface that the gas touches."""
+    out = tube_walls(gg, tubes)
+    heated = [k for k, m in enumerate(meshes) if m.temperature is not None]
+    if not heated or cut is None:
+        return out
+    if out is None:
+        out = {"wall_T": np.zeros(gg.cells), "wall_D": np.ones(gg.cells), "wall_k": np.zeros(gg.cells, np.int32),
+               "wall_A": np.zeros(gg.cells)}
+    clip = spans_period(gg, meshes)
+    first = np.cumsum([0] + [len(m.triangles) for m in meshes])
+    for k in heated:
+        m = meshes[k]
+        area = wetted_area(gg, cut, m.vertices[m.triangles], clip[first[k]:first[k + 1]])
+        free = (area > 0.0) & (out["wall_A"] == 0.0) & ~cut.unreachable
+        if not free.any():
+            continue
+        out["wall_A"][free] = area[free] * area.sum() / area[free].sum()
+        out["wall_T"][free], out["wall_D"][free], out["wall_k"][free] = m.temperature, m.convection_length, len(tubes) + k
+    return out if out["wall_A"].any() else None
 
 
 def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:

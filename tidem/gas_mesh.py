@@ -9,9 +9,11 @@ found by the rays along the other two, so a sheet of any orientation is seen). T
 - a face between two cells is blocked (CLOSED for the gas) when at least half of the s^2 rays
   between the two cell centres cross a mesh; an inlet (bottom) or outlet (top) face likewise
   over the rays between the face and its cell's centre;
-- a cell that no path of open faces joins to an open outlet face is solid for the gas (the inside
-  of a closed body, a pocket sealed off by a sheet, even one the inlet feeds: gas could not leave
-  it), and drops out of the solve; its inlet faces close;
+- a cell is solid for the gas, and drops out of the solve, where no path of open faces joins it
+  to an open outlet face (a pocket sealed off by a sheet, even one the inlet feeds: gas could
+  not leave it), or where none of its sub-cells is joined to an open outlet through sub-cell links
+  no mesh cuts (the inside of a closed body: a round tube a few cells across leaves gaps in the
+  staircase of half-blocked faces); its inlet faces close;
 - a cell's open fraction is the share of its sub-cells that a path of uncut sub-cell links
   joins to an open outlet; the voidage of a cut cell is taken over that open volume,
   eps = 1 - V_particles / (f V) (`kernels/gas_coupling.py`), with f at least MIN_OPEN.
@@ -38,6 +40,7 @@ class GasCut:
     unreachable: np.ndarray  # bool [cells]: no open path to the outlet
     open_fraction: np.ndarray  # [cells] share of the cell the gas fills (1 where uncut)
     sub: int  # sub-cells per cell and axis
+    wet: np.ndarray | None = None  # bool [cells x sub per axis]: sub-cells joined to the outlet by uncut links
 
     def report_lines(self) -> list[str]:
         cut = (self.open_fraction < 1.0) & ~self.unreachable
@@ -199,20 +202,33 @@ def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[n
     # faces as links between consecutive cells (`_reached`): on a periodic axis link j is face j + 1
     open_faces = [np.roll(kinds[c] != CLOSED, -1, axis=c) if gg.periodic[c] else _interior(kinds[c] != CLOSED, c, False)
                   for c in range(3)]
-    seeds = np.zeros(gg.cells, bool)
-    seeds[:, :, -1] = kinds[2][:, :, -1] == OUTLET
-    reach = _reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool))
-    unreachable = ~reach & ~solid.astype(bool)
-    # sub-cells: the open fraction of each cell
     fine_shape = tuple(n * s for n in gg.cells)
-    skip = np.repeat(np.repeat(np.repeat(~reach, s, 0), s, 1), s, 2)
     fine_open = [_interior(~sub_cut[c], c, gg.periodic[c]) for c in range(3)]
     fine_seeds = np.zeros(fine_shape, bool)
     fine_seeds[:, :, -1] = np.repeat(np.repeat(kinds[2][:, :, -1] == OUTLET, s, 0), s, 1) & ~sub_cut[2][:, :, -1]
-    fine_reach = _reached(fine_shape, fine_open, gg.periodic, fine_seeds, skip)
-    frac = fine_reach.reshape(gg.cells[0], s, gg.cells[1], s, gg.cells[2], s).mean(axis=(1, 3, 5))
+    # the sub-cells the gas reaches through links no mesh cuts, whatever their cell: a cell without one is
+    # wholly inside a body even where the staircase of half-blocked faces leaves it a way out
+    wet = _reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(solid.astype(bool), s))
+    dry = ~_coarse(wet, gg.cells, s).any(axis=(1, 3, 5))
+    seeds = np.zeros(gg.cells, bool)
+    seeds[:, :, -1] = kinds[2][:, :, -1] == OUTLET
+    reach = _reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool) | dry)
+    unreachable = ~reach & ~solid.astype(bool)
+    # sub-cells: the open fraction of each cell
+    fine_reach = _reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(~reach, s))
+    frac = _coarse(fine_reach, gg.cells, s).mean(axis=(1, 3, 5))
     frac = np.where(reach, np.clip(frac, MIN_OPEN, 1.0), 1.0)
-    return GasCut(blocked=blocked, unreachable=unreachable, open_fraction=frac, sub=s)
+    return GasCut(blocked=blocked, unreachable=unreachable, open_fraction=frac, sub=s, wet=wet)
+
+
+def _fine(cells: np.ndarray, s: int) -> np.ndarray:
+    """A per-cell array repeated over each cell's s^3 sub-cells."""
+    return np.repeat(np.repeat(np.repeat(cells, s, 0), s, 1), s, 2)
+
+
+def _coarse(fine: np.ndarray, cells, s: int) -> np.ndarray:
+    """A sub-cell array as (cells_x, s, cells_y, s, cells_z, s)."""
+    return fine.reshape(cells[0], s, cells[1], s, cells[2], s)
 
 
 def _sub_axes(c: int) -> tuple[int, ...]:

@@ -359,30 +359,34 @@ def inside_periodic_mesh(points, vertices, triangles, axis) -> np.ndarray:
     return _ray_parity(points, vertices, triangles, dirs)
 
 
-def open_axis(vertices, triangles) -> int | None:
+def open_axis(vertices, triangles, strict: bool = False) -> int | None:
     """None for a closed mesh (every edge shared by two triangles); for an open one, the axis (0, 1,
-    2) along which every boundary edge lies at one of the mesh's two ends, e.g. a drum's cylinder
-    without end caps; -1 if no axis does (an open mesh has no inside)."""
+    2) along which every boundary vertex lies at one of the mesh's two ends, e.g. a drum's cylinder
+    without end caps (lifter sheets along it included); -1 if no axis does (an open mesh has no
+    inside). `strict`: every boundary edge, both its vertices at the same end (a tube open at its ends;
+    not a sheet along the axis, whose rim runs from one end to the other)."""
     t = np.asarray(triangles)
     edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
     uniq, count = np.unique(edges, axis=0, return_counts=True)
-    rim = np.unique(uniq[count == 1])
+    rim = uniq[count == 1]
     if not len(rim):
         return None
     v = np.asarray(vertices, float)
     lo, hi = v.min(axis=0), v.max(axis=0)
     tol = 1e-9 * float(np.linalg.norm(hi - lo))
     for a in range(3):
-        at_end = (np.abs(v[rim, a] - lo[a]) <= tol) | (np.abs(v[rim, a] - hi[a]) <= tol)
+        ends = v[rim, a]  # [edges, 2]
+        at_lo, at_hi = np.abs(ends - lo[a]) <= tol, np.abs(ends - hi[a]) <= tol
+        at_end = (at_lo.all(axis=1) | at_hi.all(axis=1)) if strict else (at_lo | at_hi).all(axis=1)
         if hi[a] - lo[a] > 1e3 * tol and at_end.all():  # a flat sheet has both its ends at one place
             return a
     return -1
 
 
-def inside_mesh(points, vertices, triangles) -> np.ndarray | None:
-    """Whether each point lies inside a closed mesh or inside an axis-open one (`open_axis`); None if
-    the mesh has no inside."""
-    axis = open_axis(vertices, triangles)
+def inside_mesh(points, vertices, triangles, strict: bool = False) -> np.ndarray | None:
+    """Whether each point lies inside a closed mesh or inside an axis-open one (`open_axis`, `strict`
+    as there); None if the mesh has no inside."""
+    axis = open_axis(vertices, triangles, strict)
     if axis is None:
         return inside_closed_mesh(points, vertices, triangles)
     if axis < 0:

@@ -91,7 +91,7 @@ def _fixed_surfaces(scene, default_material: str, k: int, m) -> dict:
         a = np.asarray(rot.axis, float)
         axis = tuple(float(c) for c in a / np.linalg.norm(a))
     return dict(name=f"meshes[{k}]", material=m.material or default_material, friction=m.friction,
-                temperature=m.temperature, center=tuple(rot.center) if rot else (0.0, 0.0, 0.0), axis=axis,
+                temperature=m.temperature, convection_length=m.convection_length, center=tuple(rot.center) if rot else (0.0, 0.0, 0.0), axis=axis,
                 speed=float(rot.speed) if rot else 0.0, velocity=tuple(m.velocity),
                 surface_velocity=tuple(m.surface_velocity))
 
@@ -102,6 +102,8 @@ def load_mesh(scene, scene_path, default_material: str, k: int) -> tuple[MeshWal
     key = f"meshes[{k}].file"
     folder = Path(scene_path).parent if scene_path is not None else Path(".")
     path = Path(m.file) if Path(m.file).is_absolute() else folder / m.file
+    if path.is_dir():
+        return None, [f"{key}: '{m.file}' is a folder ({path.resolve()}); name the mesh file in it (STL, OBJ or PLY)"]
     if not path.is_file():
         return None, [f"{key}: no such file '{m.file}' (looked for {path.resolve()}); give the path relative to the scene "
                       "file's folder"]

@@ -27,6 +27,7 @@ class MeshWall:
     material: str
     friction: float | None = None
     temperature: float | None = None  # fixed wall temperature [K], None: adiabatic
+    convection_length: float | None = None  # length of the gas convection correlation [m] (`tidem.mesh_convection`)
     center: tuple[float, float, float] = (0.0, 0.0, 0.0)  # rotation centre at t = 0 [m]
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)  # unit rotation axis
     speed: float = 0.0  # rotation rate [rad/s]

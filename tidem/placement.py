@@ -4,7 +4,8 @@ the groups of a scene placed (`place_groups`), and the cell-order sort key of th
 Sizes are drawn from the group's distribution with its seed (cut-offs by redrawing, not by
 clipping, so no spike at the bounds). A filled region is a simple cubic lattice of spacing
 1.02 d_max (no initial overlap), its sites jittered by up to 1 % of the spacing, filled bottom-up; sites
-that would overlap a tube, a wall or a mesh wall are skipped. Given positions that overlap a mesh
+that would overlap a tube, a wall or a mesh wall are skipped, and so are those inside a body drawn as a
+mesh (`inside_bodies`: a tube or block the region surrounds). Given positions that overlap a mesh
 wall by more than numerics.max_overlap are refused with a message naming the particle.
 """
 
@@ -127,6 +128,21 @@ def mesh_position_overlaps(scene, key: str, pos: np.ndarray, radius: np.ndarray,
     return out
 
 
+def inside_bodies(sites: np.ndarray, mesh_geo: list, vessel: int | None) -> np.ndarray:
+    """Mask of the sites inside a body drawn as a mesh: a mesh with an inside (closed, or a tube open only
+    at its two ends along an axis: `mesh_geometry.inside_mesh`, strict) that holds less than half of the
+    sites (a tube or block the fill surrounds; one holding more is the vessel the region was drawn in);
+    `vessel`: the group's `inside_mesh`, never a body."""
+    out = np.zeros(len(sites), bool)
+    for k, geo in enumerate(mesh_geo):
+        if k == vessel or not len(sites):
+            continue
+        inside = inside_mesh(sites, *geo, strict=True)
+        if inside is not None and inside.mean() < 0.5:
+            out |= inside
+    return out
+
+
 def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic,
                  meshes=()) -> tuple[Placed | None, list[str]]:
     """Sizes, positions and velocities of every particle group (given positions, a region filled
@@ -158,6 +174,7 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
                                   "'inside_mesh' and fit 'region' inside it")
                     continue
                 sites = sites[inside]
+            sites = sites[~inside_bodies(sites, mesh_geo, g.inside_mesh)]
             if count is None:
                 count = len(sites)
             if len(sites) == 0 or len(sites) < count:

@@ -9,9 +9,9 @@ import pyvista as pv
 import tidem.mesh_geometry as geometry
 from tidem.mesh_geometry import facet_sag, flat_patches, inside_closed_mesh, inside_periodic_mesh, point_mesh_distance, weld
 from tidem.mesh_load import load_mesh_walls, rotation_matrix, tube_mesh_overlaps
-from tidem.placement import clear_of_obstacles, place_groups
+from tidem.placement import clear_of_obstacles, lattice_sites, place_groups
 from tidem.scene.errors import SceneError
-from tidem.scene.load import validate
+from tidem.scene.load import resolve, validate
 
 
 def raw_scene(**extra) -> dict:
@@ -120,6 +120,8 @@ def one_message(tmp_path, **mesh):
 
 def test_missing_file(tmp_path):
     assert "no such file 'nope.stl'" in one_message(tmp_path, file="nope.stl")
+    (tmp_path / "parts").mkdir()
+    assert "'parts' is a folder" in one_message(tmp_path, file="parts")
 
 
 def test_text_file_that_is_not_stl(tmp_path):
@@ -183,8 +185,14 @@ def test_bad_mesh_tables_are_refused_by_the_schema():
     assert msg.startswith("meshes[0]: a moving mesh in a scene with [gas] is not supported")
     msg = messages({"file": "a.stl", "temperature": 353.15}, gas={"cell_size": 0.1},
                    heat={"initial_temperature": 293.15})[0]
-    assert msg.startswith("meshes[0].temperature: gas convection from a heated mesh is not modelled; set "
-                          "gas.tube_convection = \"none\"")
+    assert msg == ("meshes[0].convection_length: a heated mesh gives heat to the gas by gas.tube_convection = "
+                   "\"martin_nilles\", whose bare-surface part needs the length across the flow [m]: set it (the "
+                   "outer diameter of a tube drawn as a mesh), or set gas.tube_convection = \"none\"")
+    for mesh, gas in (({"file": "a.stl", "temperature": 353.15, "convection_length": 0.03}, {"cell_size": 0.1}),
+                      ({"file": "a.stl", "temperature": 353.15}, {"cell_size": 0.1, "tube_convection": "none"})):
+        assert not any(m.startswith("meshes") for m in messages(mesh, gas=gas, heat={"initial_temperature": 293.15}))
+    assert messages({"file": "a.stl", "convection_length": -0.03}) == [
+        "meshes[0].convection_length: must be > 0 (got -0.03)"]
     assert any(m.startswith("meshes: contact.model = 'none'")
                for m in messages({"file": "a.stl"}, contact={"model": "none"}))
 
@@ -350,6 +358,36 @@ def test_open_axis_of_closed_open_and_holed_meshes():
     assert geometry.open_axis(np.asarray(drum.points), drum.regular_faces) == 1
     plate = pv.Plane().triangulate()  # open along its edges in x and in y: no inside
     assert geometry.open_axis(np.asarray(plate.points), plate.regular_faces) == -1
+    # moving_bed_hopper's wedge: two sheets along y, each rim vertex at an end of y, but the rims along y
+    # run from one end to the other: no inside when strict (a fill's bodies), open along y else (inside_mesh)
+    hopper = pv.read(str(resolve("moving_bed_hopper").parent / "wedge_hopper.stl")).clean()
+    assert geometry.open_axis(np.asarray(hopper.points), hopper.regular_faces, strict=True) == -1
+    assert geometry.open_axis(np.asarray(hopper.points), hopper.regular_faces) == 1
+    assert geometry.open_axis(np.asarray(drum.points), drum.regular_faces, strict=True) == 1
+
+
+def test_a_fill_skips_the_inside_of_the_bodies_it_surrounds(tmp_path):
+    """A region filled around a closed cube and around a tube open at its ends (spanning the box along
+    y) leaves their insides empty; a region drawn inside a closed vessel (most of its sites inside) is
+    kept."""
+    cube_file(tmp_path, size=0.4, center=(-0.2, 0.0, 0.0))
+    pv.Cylinder(center=(0.25, 0.0, 0.0), direction=(0, 1, 0), radius=0.15, height=1.0, resolution=48,
+                capping=False).triangulate().save(tmp_path / "tube.stl")
+    fill = {"name": "bed", "material": "sand", "diameter": 0.05,
+            "region": {"min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5]}}
+    scene = validate(raw_scene(particles=[fill], meshes=[{"file": "cube.stl"}, {"file": "tube.stl"}])).scene
+    walls, errs = load_mesh_walls(scene, tmp_path / "scene.toml", "sand")
+    placed, errs = place_groups(scene, [], [], [1.0, 1.0, 1.0], [False] * 3, meshes=walls)
+    x = placed.x0
+    assert errs == [] and len(x) > 1000
+    assert not (np.abs(x - [-0.2, 0.0, 0.0]) < 0.2).all(axis=1).any(), "none in the cube"
+    assert not (np.hypot(x[:, 0] - 0.25, x[:, 2]) < 0.15).any(), "none in the tube"
+    vessel = {**fill, "region": {"min": [-0.35, -0.15, -0.15], "max": [-0.05, 0.15, 0.15]}}
+    scene = validate(raw_scene(particles=[vessel], meshes=[{"file": "cube.stl"}])).scene
+    placed, errs = place_groups(scene, [], [], [1.0, 1.0, 1.0], [False] * 3, meshes=walls[:1])
+    sites = lattice_sites(*vessel["region"].values(), 1.02 * 0.05, "cubic")
+    clear = clear_of_obstacles(sites, 0.51 * 0.05, [], [], [1.0] * 3, [False] * 3, [(walls[0].vertices, walls[0].triangles)])
+    assert errs == [] and len(placed.x0) == clear.sum() == 5**3, "the cube as the vessel of its region: every site kept"
 
 
 def test_fill_inside_a_drum(tmp_path):

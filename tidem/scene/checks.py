@@ -255,10 +255,12 @@ def mesh_checks(scene: Scene) -> list[str]:
                 errs.append(f"meshes[{k}]: a moving mesh in a scene with [gas] is not supported (the gas grid is cut "
                             "by the meshes once, at the start); remove its rotation/velocity (surface_velocity is "
                             "allowed) or the [gas] table")
-            if m.temperature is not None and scene.gas.tube_convection != "none":
-                errs.append(f"meshes[{k}].temperature: gas convection from a heated mesh is not modelled; set "
-                            "gas.tube_convection = \"none\" (the mesh still heats the particles, through the gas "
-                            "gap too) or remove the temperature")
+            if m.temperature is not None and scene.heat is not None and scene.gas.tube_convection != "none" \
+                    and m.convection_length is None:
+                errs.append(f"meshes[{k}].convection_length: a heated mesh gives heat to the gas by "
+                            f"gas.tube_convection = \"{scene.gas.tube_convection}\", whose bare-surface part needs "
+                            "the length across the flow [m]: set it (the outer diameter of a tube drawn as a mesh), "
+                            "or set gas.tube_convection = \"none\"")
     return errs
 
 
