@@ -10,6 +10,7 @@ import pytest
 import pyvista as pv
 
 from tests.conftest import make_scene
+from tidem.check_report import mesh_convection_lines
 from tidem.drum_heat import mesh_heat_rows
 from tidem.gas_geometry import convection_walls, gas_walls, spans_period, tube_walls
 from tidem.kernels.gas_grid import GasGrid
@@ -123,6 +124,9 @@ def test_a_tube_drawn_as_a_mesh_heats_still_gas_by_churchill_bernstein_and_the_g
     assert G.G.T.to_numpy().max() > 300.5
     assert total() - before == pytest.approx(float(G.G.wall_energy.to_numpy()[0]) - given, rel=1e-9)
     assert G.summary()["meshes0_gas_heat_W"] == pytest.approx(float(G.G.wall_rate.to_numpy()[0]))
+    (line,) = mesh_convection_lines(s.model)  # what `tidem check` says
+    assert line.startswith("meshes[0]: gives heat to the gas (martin_nilles, length 0.024 m) over 0.0009") \
+        and line.endswith("1.00 x its area (1: a closed body, 2: a sheet in the gas)"), line
 
 
 def test_a_heated_mesh_reports_its_gas_share_of_alpha():

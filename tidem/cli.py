@@ -175,6 +175,7 @@ def check(
     errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
     import numpy as np
 
+    from tidem.check_report import gas_line, gas_notes, mesh_convection_lines, output_notes
     from tidem.memory import format_bytes
     from tidem.mesh_walls import report_lines
     from tidem.output_size import output_bytes
@@ -208,6 +209,7 @@ def check(
         *([gas_line(model)] if f.gas else []),
         *report_lines(model.meshes, model.mesh_table, 2 * float(model.radius.min())),
         *(model.gas_cut.report_lines() if model.gas_cut is not None else []),
+        *(mesh_convection_lines(model) if f.gas and f.heat else []),
         (f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; "
          f"skin {model.skin:.3g} m" if f.contacts else "grid: none (no contacts, no neighbour search)"),
         f"kernels: {', '.join(f.kernels())}",
@@ -223,59 +225,6 @@ def check(
     from tidem.launch import passage_notes
 
     passage_notes(loaded.scene, "note: ", typer.echo)
-
-
-def output_notes(model, snapshots: int) -> list[str]:
-    """`tidem check`'s notes on output that will not be what the scene asks (at most one snapshot a step;
-    an interval beyond t_end) and on a run of more than LONG_RUN steps."""
-    import math
-
-    out = model.scene.output
-    steps = math.ceil(model.t_end / model.dt)
-    asked = out.snapshots if out.interval is None else math.floor(model.t_end / out.interval + 1e-9)
-    notes = []
-    if asked > steps:
-        notes.append(f"note: {asked} snapshots asked for, but a run writes at most one a step: {snapshots} in "
-                     f"{steps} steps")
-    if out.interval is not None and out.interval > model.t_end:
-        notes.append(f"note: output.interval ({out.interval:g} s) is longer than t_end ({model.t_end:g} s): only "
-                     "the snapshot at t = 0 is written (the final state is in checkpoint.npz)")
-    if steps > LONG_RUN:
-        notes.append(f"note: {steps:.3g} steps to t_end: at 1e7 particle-steps/s (2 CPU cores) about "
-                     f"{steps * model.capacity / 1e7 / 86400:.3g} days; check numerics.dt and numerics.t_end")
-    return notes
-
-
-LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
-
-
-def gas_notes(model) -> list[str]:
-    """`tidem check`'s notes on a gas grid too coarse to resolve the bed: fewer than 3 cells up, or one
-    cell across a walled axis."""
-    from tidem.gas_geometry import gas_grid
-
-    gg = gas_grid(model.scene)
-    size = model.scene.gas.cell_size
-    notes = [f"note: the gas grid has {gg.cells[2]} cell(s) up, so it does not resolve the bed's height; a smaller "
-             f"gas.cell_size (now {size:g} m)"] if gg.cells[2] < 3 else []
-    notes += [f"note: the gas grid has one cell across {'xy'[a]} between walls, so the gas flow does not resolve "
-              f"it; a smaller gas.cell_size (now {size:g} m)" for a in range(2) if gg.cells[a] == 1 and not gg.periodic[a]]
-    return notes
-
-
-def gas_line(model) -> str:
-    """`tidem check`'s line on the gas grid, the voidage its grains see and how the pressure is solved."""
-    from tidem.gas_geometry import gas_grid, voidage_layers
-    from tidem.kernels.gas_band import band_width
-
-    gas = model.scene.gas
-    gg = gas_grid(model.scene)
-    layers = voidage_layers(model)
-    width = band_width(gg, cpu=True)
-    cg = f"Jacobi-preconditioned CG (tolerance {gas.tolerance:g}, at most {gas.max_iterations} iterations)"
-    solve = (f"directly on the CPU (banded Cholesky, half-bandwidth {width} cells), by {cg} on a GPU" if width else f"by {cg}")
-    return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
-            f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + f"; pressure solved {solve}")
 
 
 @app.command()
