@@ -213,6 +213,7 @@ def test_invalid_toml(tmp_path):
     (["scene", "sphere_impact", "--set", "numerics.t_end"], "expected KEY=VALUE"),
     (["bench", "--precision", "half"], "--precision half: choose float32, float64, mixed, both or all"),
     (["bench", "--arch", "gpu"], "--arch gpu: choose cpu, cuda or vulkan"),
+    (["check", ""], "no scene given: name a scene file or a shipped scene (char_combustion.toml"),
 ])
 def test_bad_command_line_options(args, expected):
     result = runner.invoke(app, args)

@@ -41,11 +41,14 @@ def resolve(name_or_path: str | None) -> Path:
     also where a folder of that name holds no scene (e.g. a run's output folder, --out NAME)."""
     if name_or_path is None:
         name_or_path = DEFAULT_SCENE
+    if not str(name_or_path).strip():
+        raise SceneError("(empty name)", ["no scene given: name a scene file or a shipped scene "
+                                          f"({', '.join(shipped_scenes())})"])
     path = Path(name_or_path)
     if path.is_file():
         return path
     shipped = shipped_scenes()
-    inside = sorted(p.name for p in path.glob("*.toml")) if path.is_dir() else []
+    inside = sorted(p.name for p in path.glob("*.toml") if p.name != "pyproject.toml") if path.is_dir() else []
     bare_shipped = len(path.parts) == 1 and {path.name, path.name + ".toml"} & set(shipped)
     if path.is_dir() and (inside or not bare_shipped):
         raise SceneError(str(name_or_path), [
