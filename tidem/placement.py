@@ -194,6 +194,12 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
             vel = np.asarray(g.velocities, float) if g.velocities is not None else np.tile(g.velocity, (count, 1))
             act = np.ones(count, bool)
             found = mesh_position_overlaps(scene, key, pos, 0.5 * d, meshes)
+            trapped = np.flatnonzero(inside_bodies(pos, mesh_geo, None))
+            found += [f"{key}.positions[{i}]: {np.round(pos[i], 6).tolist()} lies inside a body drawn as a mesh "
+                      "(a closed mesh around it); move it out" + (f" ({len(trapped)} particles of this group lie "
+                                                                  "inside one)" if len(trapped) > 1 and i == trapped[0]
+                                                                  else "")
+                      for i in trapped[:MAX_MESH_MESSAGES]]
             if found:
                 errors += found
                 continue

@@ -388,6 +388,15 @@ def test_a_fill_skips_the_inside_of_the_bodies_it_surrounds(tmp_path):
     sites = lattice_sites(*vessel["region"].values(), 1.02 * 0.05, "cubic")
     clear = clear_of_obstacles(sites, 0.51 * 0.05, [], [], [1.0] * 3, [False] * 3, [(walls[0].vertices, walls[0].triangles)])
     assert errs == [] and len(placed.x0) == clear.sum() == 5**3, "the cube as the vessel of its region: every site kept"
+    given = {"name": "bed", "material": "sand", "diameter": 0.05,
+             "positions": [[-0.2, 0.0, 0.0], [0.25, 0.3, 0.0], [0.0, 0.3, 0.3], [0.3, 0.3, 0.4]]}
+    scene = validate(raw_scene(particles=[given], meshes=[{"file": "cube.stl"}, {"file": "tube.stl"}])).scene
+    placed, errs = place_groups(scene, [], [], [1.0, 1.0, 1.0], [False] * 3, meshes=walls)
+    assert placed is None and errs == [
+        "particles[0].positions[0]: [-0.2, 0.0, 0.0] lies inside a body drawn as a mesh (a closed mesh around it); "
+        "move it out (2 particles of this group lie inside one)",
+        "particles[0].positions[1]: [0.25, 0.3, 0.0] lies inside a body drawn as a mesh (a closed mesh around it); "
+        "move it out"]
 
 
 def test_fill_inside_a_drum(tmp_path):
