@@ -136,3 +136,36 @@ def make_contact_response(law: int, rolling: bool):
         return force, f_t, m_roll, xi, mr, dmax
 
     return respond
+
+
+def make_slot_response(S, prefix: str, respond, rolling: bool, hysteretic: bool):
+    """The contact of a particle with a surface (a plane, a tube, a mesh triangle) whose history lies in
+    a slot of the particle's rows `{prefix}ft` (and `{prefix}mr`, `{prefix}dmax` where the law keeps them)
+    of the State S: `touch(i, slot, nrm, delta, u, vi, wi, mi, ri, params, dt)` runs the contact law
+    `respond` against a wall of infinite diameter moving at u at the contact point, with the particle's own
+    mass and rolling inertia 1.4 m r^2, stores the updated history in the slot and returns the force and
+    the torque on the particle."""
+    ft = getattr(S, prefix + "ft")
+    mr_rows = getattr(S, prefix + "mr") if rolling else None
+    dmax_rows = getattr(S, prefix + "dmax") if hysteretic else None
+    zero3 = ti.Vector([0.0, 0.0, 0.0])
+
+    @ti.func
+    def touch(i, slot, nrm, delta, u, vi, wi, mi, ri, params, dt):
+        v_rel = vi - u + (ri * wi).cross(nrm)
+        dmax = 0.0
+        if ti.static(hysteretic):
+            dmax = dmax_rows[i, slot]
+        mr = zero3
+        if ti.static(rolling):
+            mr = mr_rows[i, slot]
+        f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
+            nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri, params, ft[i, slot], mr, dmax, dt)
+        ft[i, slot] = xi_new
+        if ti.static(rolling):
+            mr_rows[i, slot] = mr_new
+        if ti.static(hysteretic):
+            dmax_rows[i, slot] = dmax_new
+        return f, (ri * nrm).cross(f_t) + m_roll
+
+    return touch

@@ -51,7 +51,7 @@ from types import SimpleNamespace
 
 import taichi as ti
 
-from .contact_laws import make_contact_response
+from .contact_laws import make_contact_response, make_slot_response
 from .heat import pfp_conductance, wall_conductance, wall_radiation
 
 FACE, EDGE, VERTEX = 0, 1, 2
@@ -110,8 +110,8 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
     contact slots per particle; `reach`: how far beyond its radius a particle lists triangles (skin
     and gas lens); `on_tol`: the distance within which a point lies on a triangle; `grid_funcs`:
     (cell_coord, cell_id) of the neighbour grid; `radius_of`: `kernels/sizes.py`."""
-    respond = make_contact_response(law, rolling)
     hysteretic = law == 2
+    slot_touch = make_slot_response(S, "mh_", make_contact_response(law, rolling), rolling, hysteretic)
     pfp = heat and fluid_layer > 0.0
     cell_coord, cell_id = grid_funcs
     zero3 = ti.Vector([0.0, 0.0, 0.0])
@@ -224,23 +224,9 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
                 used |= 1 << slot
                 S.mh_n[i, slot] = nrm
                 u = wall_velocity(m, xi + dist * nrm, nrm, t)
-                v_rel = vi - u + (ri * wi).cross(nrm)
-                dmax = 0.0
-                if ti.static(hysteretic):
-                    dmax = S.mh_dmax[i, slot]
-                mr = zero3
-                if ti.static(rolling):
-                    mr = S.mh_mr[i, slot]
-                f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                    nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri, params,
-                    S.mh_ft[i, slot], mr, dmax, dt)
+                f, t_i = slot_touch(i, slot, nrm, delta, u, vi, wi, mi, ri, params, dt)
                 force += f
-                torque += (ri * nrm).cross(f_t) + m_roll
-                S.mh_ft[i, slot] = xi_new
-                if ti.static(rolling):
-                    S.mh_mr[i, slot] = mr_new
-                if ti.static(hysteretic):
-                    S.mh_dmax[i, slot] = dmax_new
+                torque += t_i
                 if ti.static(heat):
                     if conduct and S.surf_T[s] > 0.0:
                         flow = wall_conductance(params, ri, delta, cg) * (S.surf_T[s] - S.T[i])

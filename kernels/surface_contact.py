@@ -28,6 +28,7 @@ from types import SimpleNamespace
 
 import taichi as ti
 
+from .contact_laws import make_slot_response
 from .heat import pfp_conductance, wall_conductance, wall_radiation
 
 
@@ -51,6 +52,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
     cg = float(grain_scale)
     pfp = heat and fluid_layer > 0.0
     single = s_one is not None
+    slot_touch = make_slot_response(S, "w", respond, rolling, hysteretic)
 
     @ti.func
     def lens(p, r_eff, gap, delta_f):
@@ -216,19 +218,9 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                     if slot < 0:
                         ti.atomic_add(S.overflow[1], 1)
                     else:
-                        v_rel = vi - u + (ri * wi).cross(nrm)
-                        dmax = 0.0
-                        if ti.static(hysteretic):
-                            dmax = S.wdmax[i, slot]
-                        mr = zero3
-                        if ti.static(rolling):
-                            mr = S.wmr[i, slot]
-                        f, f_t, m_roll, xi_new, mr_new, dmax_new = respond(
-                            nrm, delta, v_rel, wi, mi, ri, 2.0 * ri, 0.0, 1.4 * mi * ri * ri,
-                            surface_params(mat_i, s), S.wft[i, slot], mr, dmax, dt)
+                        f, t_i = slot_touch(i, slot, nrm, delta, u, vi, wi, mi, ri, surface_params(mat_i, s), dt)
                         force += f
-                        torque += (ri * nrm).cross(f_t) + m_roll
-                        S.wft[i, slot] = xi_new
+                        torque += t_i
                         if ti.static(heat):
                             if conduct and S.surf_T[s] > 0.0:
                                 b = tube_bin(s, nrm)
@@ -238,10 +230,6 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                                     flow += wall_radiation(surface_params(mat_i, s), ri, t_wall, S.T[i])
                                 heat_in += flow
                                 surface_heat(s, b, flow, blk)
-                        if ti.static(rolling):
-                            S.wmr[i, slot] = mr_new
-                        if ti.static(hysteretic):
-                            S.wdmax[i, slot] = dmax_new
                         if diag:
                             worst = ti.max(worst, delta / ri)
                             touching += 1
