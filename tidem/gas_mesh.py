@@ -11,9 +11,10 @@ found by the rays along the other two, so a sheet of any orientation is seen). T
   over the rays between the face and its cell's centre;
 - a cell is solid for the gas, and drops out of the solve, where no path of open faces joins it
   to an open outlet face (a pocket sealed off by a sheet, even one the inlet feeds: gas could
-  not leave it), or where none of its sub-cells is joined to an open outlet through sub-cell links
-  no mesh cuts (the inside of a closed body: a round tube a few cells across leaves gaps in the
-  staircase of half-blocked faces); its inlet faces close;
+  not leave it), or where less than half of its sub-cells are joined to an open outlet through
+  sub-cell links no mesh cuts (a cell mostly inside a closed body, as a cell whose centre lies in
+  a tube is solid; a round tube a few cells across also leaves gaps in the staircase of
+  half-blocked faces); its inlet faces close;
 - a cell's open fraction is the share of its sub-cells that a path of uncut sub-cell links
   joins to an open outlet; the voidage of a cut cell is taken over that open volume,
   eps = 1 - V_particles / (f V) (`kernels/gas_coupling.py`), with f at least MIN_OPEN.
@@ -29,7 +30,7 @@ from tidem.kernels.gas_grid import CLOSED, OUTLET, GasGrid
 
 MIN_OPEN = 0.2  # smallest open fraction a reachable cell is given (a sliver cell's voidage stays bounded)
 MAX_SUBCELLS = 4_000_000  # sub-cells of the whole grid at most: s = 4, else 2, else 1
-BLOCKED_SHARE = 0.5  # share of a face's rays a mesh must cut to block it
+BLOCKED_SHARE = 0.5  # share of a face's rays a mesh must cut to block it, and of a cell's volume a body must hold to fill it
 
 
 @dataclass
@@ -206,10 +207,10 @@ def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[n
     fine_open = [_interior(~sub_cut[c], c, gg.periodic[c]) for c in range(3)]
     fine_seeds = np.zeros(fine_shape, bool)
     fine_seeds[:, :, -1] = np.repeat(np.repeat(kinds[2][:, :, -1] == OUTLET, s, 0), s, 1) & ~sub_cut[2][:, :, -1]
-    # the sub-cells the gas reaches through links no mesh cuts, whatever their cell: a cell without one is
-    # wholly inside a body even where the staircase of half-blocked faces leaves it a way out
+    # the sub-cells the gas reaches through links no mesh cuts, whatever their cell: a cell with less than
+    # half of them is mostly inside a body, even where the staircase of half-blocked faces leaves it a way out
     wet = _reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(solid.astype(bool), s))
-    dry = ~_coarse(wet, gg.cells, s).any(axis=(1, 3, 5))
+    dry = _coarse(wet, gg.cells, s).mean(axis=(1, 3, 5)) < BLOCKED_SHARE
     seeds = np.zeros(gg.cells, bool)
     seeds[:, :, -1] = kinds[2][:, :, -1] == OUTLET
     reach = _reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool) | dry)
