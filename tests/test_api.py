@@ -27,6 +27,10 @@ def test_overrides_as_set_gives_them():
     assert tidem.load_scene("sphere_impact", {"particles[0].positions": [[-0.01, 0.0, 0.0]] * 3}).scene.particles[0] \
         .positions[0] == (-0.01, 0.0, 0.0)
     assert tidem.load_scene().name == "fluidized_tube", "no name: the default scene, as `tidem scene`"
+    swept = tidem.load_scene("sphere_impact", particles__0__seed=np.arange(3)[2], numerics__force_dt=np.bool_(False),
+                             particles__0__velocity=np.array([0.5, 0.0, 0.0]))  # values as a numpy sweep gives them
+    assert swept.scene.particles[0].seed == 2 and swept.scene.numerics.force_dt is False
+    assert swept.scene.particles[0].velocity == (0.5, 0.0, 0.0)
 
 
 def test_errors_carry_the_messages_the_cli_prints(tmp_path):

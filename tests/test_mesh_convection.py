@@ -72,6 +72,22 @@ def test_a_closed_tube_shows_the_gas_its_outside_and_a_sheet_both_its_sides():
                        spans_period(GRID, [sheet])).sum() == pytest.approx(2 * area_of(sheet), rel=1e-12)
 
 
+def test_a_plate_thinner_than_a_sub_cell_shows_its_outside_once():
+    """A closed plate 0.5 mm thick (sub-cells of 0.75 mm): a probe off a face towards the inside passes
+    through the plate into the gas beyond, so only the side facing the plate's inside (`inward_sides`)
+    keeps a face from being counted twice."""
+    from tidem.mesh_convection import inward_sides
+
+    box = pv.Box(bounds=(0.01, 0.05, 0.003, 0.009, 0.03, 0.0305)).triangulate()
+    plate = wall(box)
+    cut = cut_of([plate])
+    tri, clip = plate.vertices[plate.triangles], spans_period(GRID, [plate])
+    sides = inward_sides(plate.vertices, plate.triangles)
+    assert (sides != 0).all()
+    assert wetted_area(GRID, cut, tri, clip, sides).sum() == pytest.approx(area_of(plate), rel=1e-12)
+    assert wetted_area(GRID, cut, tri, clip).sum() > 1.3 * area_of(plate), "faces counted twice without it"
+
+
 def test_a_mesh_keeps_its_area_beside_a_tube_and_the_tube_its_own():
     """Where a heated tube borders a cell, the cell is the tube's; the mesh's share there goes to its
     other cells, so both walls keep their whole areas."""

@@ -20,8 +20,12 @@ def mesh_convection_lines(model) -> list[str]:
         if m.temperature is None:
             continue
         shown = float(walls["wall_A"][mine].sum()) if mine is not None else 0.0
+        if shown == 0.0:
+            lines.append(f"note: {m.name} gives the gas no heat: its surface lies in no gas cell of its own (cells "
+                         "beside a heated tube are the tube's, and sealed cells have no gas)")
+            continue
         lines.append(f"{m.name}: gives heat to the gas ({model.scene.gas.tube_convection}, length "
-                     f"{m.convection_length:g} m) over {shown:.4g} m^2 in {int(mine.sum()) if mine is not None else 0} "
+                     f"{m.convection_length:g} m) over {shown:.4g} m^2 in {int(mine.sum())} "
                      f"cells, {shown / m.stats['area']:.2f} x its area (1: a closed body, 2: a sheet in the gas)")
     return lines
 

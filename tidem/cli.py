@@ -171,8 +171,9 @@ def check(
     path: Annotated[Optional[str], typer.Argument(help="Scene file or shipped scene name")] = None,
     set_: Sets = None,
 ):
-    """Validate a scene and print its derived numbers (particles, time steps, kernels, memory); a scene with
-    errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
+    """Validate a scene and print its derived numbers (particles, time steps, kernels, memory).
+
+    A scene with errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
     import numpy as np
 
     from tidem.check_report import gas_line, gas_notes, mesh_convection_lines, output_notes
@@ -222,9 +223,9 @@ def check(
         lines += gas_notes(model)
     lines += output_notes(model, snapshots)
     typer.echo("\n".join(lines))
-    from tidem.launch import passage_notes
+    from tidem.launch import scene_notes
 
-    passage_notes(loaded.scene, "note: ", typer.echo)
+    scene_notes(loaded.scene, "note: ", typer.echo)
 
 
 @app.command()
@@ -250,8 +251,11 @@ def bench(
                                         "launch, as a run takes them (default: apart, to tell them apart)")] = False,
     set_: Sets = None,
 ):
-    """Particle-steps per second on the dense settled bed of the peer benchmark (Hertz + tangential history),
-    with --render frames per second of the renderer, with --profile SCENE a scene's time per step by phase."""
+    """Particle-steps per second on the peer benchmark's settled bed; --render, --profile SCENE.
+
+    The bed is dense and settled (Hertz with tangential history); --render: the renderer's frames per second.
+
+    --profile SCENE: a scene's time per step by phase."""
     if arch not in ("cpu", "cuda", "vulkan"):
         fail(f"--arch {arch}: choose cpu, cuda or vulkan", 2)
     if profile is not None:

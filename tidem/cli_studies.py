@@ -75,8 +75,9 @@ def tradeoff(
     threads: Threads = None,
     observables: Observables = None,
 ):
-    """Run variants of a scene in parallel and report wall time, particle-steps/s and observables with their
-    error against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png)."""
+    """Run variants of a scene in parallel: wall time, particle-steps/s and observables against a reference.
+
+    Each observable's error is against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png)."""
     set_ = with_observables(set_, observables)
     loaded = load_scene(path, set_)
     if not loaded.scene.observables:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas_mesh import MIN_OPEN, GasCut, gas_cut
-from tidem.mesh_convection import wetted_area
+from tidem.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET
 from tidem.kernels.gas_grid import GasGrid
 
@@ -172,7 +172,8 @@ def convection_walls(gg: GasGrid, tubes: list[dict], meshes: list, cut: GasCut |
     first = np.cumsum([0] + [len(m.triangles) for m in meshes])
     for k in heated:
         m = meshes[k]
-        area = wetted_area(gg, cut, m.vertices[m.triangles], clip[first[k]:first[k + 1]])
+        area = wetted_area(gg, cut, m.vertices[m.triangles], clip[first[k]:first[k + 1]],
+                           inward_sides(m.vertices, m.triangles))
         free = (area > 0.0) & (out["wall_A"] == 0.0) & ~cut.unreachable
         if not free.any():
             continue

@@ -107,11 +107,13 @@ def load_checkpoint(run_dir: Path, loaded, model, say: Say = to_stderr):
     return meta, arrays
 
 
-def passage_notes(scene, prefix: str, say: Say = to_stderr) -> None:
-    """Advice on passages too narrow for the scene's coarse-grained parcels (`tidem.scene.passages`)."""
+def scene_notes(scene, prefix: str, say: Say = to_stderr) -> None:
+    """Advice on a valid scene: passages too narrow for its coarse-grained parcels (`tidem.scene.passages`),
+    temperatures that look like degrees Celsius (`tidem.scene.checks.celsius_notes`)."""
+    from tidem.scene.checks import celsius_notes
     from tidem.scene.passages import narrow_passages
 
-    for note in narrow_passages(scene):
+    for note in narrow_passages(scene) + celsius_notes(scene):
         say(prefix + note)
 
 
@@ -142,7 +144,7 @@ def prepare(loaded, out: Path | None = None, resume: Path | None = None, smoke: 
     if resume is None:
         fits_on_disk(loaded, model, out_dir, frames)
     checkpoint = load_checkpoint(out_dir, loaded, model, say) if resume is not None else None
-    passage_notes(loaded.scene, "tidem: note: ", say)
+    scene_notes(loaded.scene, "tidem: note: ", say)
     active = int(model.active0.sum())
     say(f"tidem: {model.name}: {active} particles{f' (+{model.capacity - active} to pour)' if model.pours else ''}, "
         f"dt = {model.dt:.3g} s, t_end = {model.t_end:.4g} s -> {out_dir}")

@@ -128,19 +128,24 @@ def mesh_position_overlaps(scene, key: str, pos: np.ndarray, radius: np.ndarray,
     return out
 
 
-def inside_bodies(sites: np.ndarray, mesh_geo: list, vessel: int | None) -> np.ndarray:
-    """Mask of the sites inside a body drawn as a mesh: a mesh with an inside (closed, or a tube open only
-    at its two ends along an axis: `mesh_geometry.inside_mesh`, strict) that holds less than half of the
-    sites (a tube or block the fill surrounds; one holding more is the vessel the region was drawn in);
-    `vessel`: the group's `inside_mesh`, never a body."""
-    out = np.zeros(len(sites), bool)
-    for k, geo in enumerate(mesh_geo):
-        if k == vessel or not len(sites):
+def inside_bodies(points: np.ndarray, mesh_geo: list, vessel: int | None, room: float) -> np.ndarray:
+    """Mask of the points inside a body drawn as a mesh: a mesh with an inside (closed, or a tube open only
+    at its two ends along an axis: `mesh_geometry.inside_mesh`, strict) whose bounding box is less than half
+    the `room` [m^3] the points are placed in (a region's box, or the domain for given positions: a tube or
+    block in the bed; a larger one is the vessel they were drawn in); `vessel`: the group's `inside_mesh`,
+    never a body."""
+    out = np.zeros(len(points), bool)
+    for k, (vertices, triangles) in enumerate(mesh_geo):
+        if k == vessel or not len(points) or np.prod(np.ptp(vertices, axis=0)) >= 0.5 * room:
             continue
-        inside = inside_mesh(sites, *geo, strict=True)
-        if inside is not None and inside.mean() < 0.5:
+        inside = inside_mesh(points, vertices, triangles, strict=True)
+        if inside is not None:
             out |= inside
     return out
+
+
+def _box_volume(lo, hi) -> float:
+    return float(np.prod(np.asarray(hi, float) - np.asarray(lo, float)))
 
 
 def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic,
@@ -174,7 +179,7 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
                                   "'inside_mesh' and fit 'region' inside it")
                     continue
                 sites = sites[inside]
-            sites = sites[~inside_bodies(sites, mesh_geo, g.inside_mesh)]
+            sites = sites[~inside_bodies(sites, mesh_geo, g.inside_mesh, _box_volume(g.region.min, g.region.max))]
             if count is None:
                 count = len(sites)
             if len(sites) == 0 or len(sites) < count:
@@ -194,9 +199,9 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
             vel = np.asarray(g.velocities, float) if g.velocities is not None else np.tile(g.velocity, (count, 1))
             act = np.ones(count, bool)
             found = mesh_position_overlaps(scene, key, pos, 0.5 * d, meshes)
-            trapped = np.flatnonzero(inside_bodies(pos, mesh_geo, None))
+            trapped = np.flatnonzero(inside_bodies(pos, mesh_geo, None, _box_volume(dom.min, dom.max)))
             found += [f"{key}.positions[{i}]: {np.round(pos[i], 6).tolist()} lies inside a body drawn as a mesh "
-                      "(a closed mesh around it); move it out" + (f" ({len(trapped)} particles of this group lie "
+                      "(a closed mesh, or a tube open at its ends, around it); move it out" + (f" ({len(trapped)} particles of this group lie "
                                                                   "inside one)" if len(trapped) > 1 and i == trapped[0]
                                                                   else "")
                       for i in trapped[:MAX_MESH_MESSAGES]]

@@ -100,6 +100,8 @@ def run_check(path, *extra):
          "particles[0].coarse_grain: expected a number, got true"),
         (lambda r: r.update(output={"snapshots": "40"}),
          "output.snapshots: expected a number, got the text '40'"),
+        (lambda r: r["heat"].update(initial_temperature=-5),
+         "heat.initial_temperature: must be > 0 (got -5); temperatures are in K (-5 °C is 268.15 K)"),
         (lambda r: r.update(reactions=[{"type": "burn"}]),
          "reactions[0]: type must be one of char_combustion, polymerization, sublimation (got 'burn')"),
         (lambda r: r.update(reactions=[{"rate": 1.0}]),
@@ -247,3 +249,6 @@ def test_check_notes_what_a_run_would_not_do_as_asked():
     assert result.exit_code == 0 and "note: the gas grid has 1 cell(s) up" in result.output, result.output
     assert "note: the gas grid has one cell across x between walls" in result.output
     assert "note:" not in runner.invoke(app, ["check", "char_combustion"]).output
+    result = runner.invoke(app, ["check", "fluidized_tube", "--set", "heat.initial_temperature=20"])
+    assert result.exit_code == 0 and ("note: heat.initial_temperature = 20 K; temperatures are in kelvin (20 °C "
+                                      "would be 293.15 K)") in result.output, result.output

@@ -368,8 +368,8 @@ def test_open_axis_of_closed_open_and_holed_meshes():
 
 def test_a_fill_skips_the_inside_of_the_bodies_it_surrounds(tmp_path):
     """A region filled around a closed cube and around a tube open at its ends (spanning the box along
-    y) leaves their insides empty; a region drawn inside a closed vessel (most of its sites inside) is
-    kept."""
+    y) leaves their insides empty; a region drawn inside a closed vessel (a bounding box of at least half
+    the region's) is kept; given positions inside a body are refused, one alone too."""
     cube_file(tmp_path, size=0.4, center=(-0.2, 0.0, 0.0))
     pv.Cylinder(center=(0.25, 0.0, 0.0), direction=(0, 1, 0), radius=0.15, height=1.0, resolution=48,
                 capping=False).triangulate().save(tmp_path / "tube.stl")
@@ -393,10 +393,15 @@ def test_a_fill_skips_the_inside_of_the_bodies_it_surrounds(tmp_path):
     scene = validate(raw_scene(particles=[given], meshes=[{"file": "cube.stl"}, {"file": "tube.stl"}])).scene
     placed, errs = place_groups(scene, [], [], [1.0, 1.0, 1.0], [False] * 3, meshes=walls)
     assert placed is None and errs == [
-        "particles[0].positions[0]: [-0.2, 0.0, 0.0] lies inside a body drawn as a mesh (a closed mesh around it); "
+        "particles[0].positions[0]: [-0.2, 0.0, 0.0] lies inside a body drawn as a mesh (a closed mesh, or a tube open at "
+        "its ends, around it); "
         "move it out (2 particles of this group lie inside one)",
-        "particles[0].positions[1]: [0.25, 0.3, 0.0] lies inside a body drawn as a mesh (a closed mesh around it); "
+        "particles[0].positions[1]: [0.25, 0.3, 0.0] lies inside a body drawn as a mesh (a closed mesh, or a tube open at "
+        "its ends, around it); "
         "move it out"]
+    alone = {**given, "positions": [[0.25, 0.3, 0.0]]}  # one particle, inside the tube: still refused
+    scene = validate(raw_scene(particles=[alone], meshes=[{"file": "cube.stl"}, {"file": "tube.stl"}])).scene
+    assert place_groups(scene, [], [], [1.0, 1.0, 1.0], [False] * 3, meshes=walls)[0] is None
 
 
 def test_fill_inside_a_drum(tmp_path):

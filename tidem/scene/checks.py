@@ -40,6 +40,27 @@ def heat_checks(scene: Scene) -> list[str]:
     return errs
 
 
+COLD = 150.0  # K: a scene temperature below this is noted as possibly meant in degrees Celsius
+
+
+def celsius_notes(scene: Scene) -> list[str]:
+    """Notes on temperatures below COLD K, which look like degrees Celsius written where tidem reads kelvin
+    (a note, not an error: a cryogenic bed is possible)."""
+    if scene.heat is None:
+        return []
+    temps = [("heat.initial_temperature", scene.heat.initial_temperature), ("domain.wall_temperature",
+                                                                             scene.domain.wall_temperature)]
+    temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
+    temps += [(f"walls[{i}].temperature", w.temperature) for i, w in enumerate(scene.walls)]
+    temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
+    temps += [(f"meshes[{i}].temperature", m.temperature) for i, m in enumerate(scene.meshes)]
+    if scene.gas is not None:
+        temps += [("gas.inlet_temperature", scene.gas.inlet_temperature),
+                  ("gas.initial_temperature", scene.gas.initial_temperature)]
+    return [f"{key} = {value:g} K; temperatures are in kelvin ({value:g} °C would be {value + 273.15:g} K)"
+            for key, value in temps if value is not None and value < COLD]
+
+
 def coarse_grain_checks(scene: Scene) -> list[str]:
     """Coarse-grained groups (a parcel of k d for k^3 grains; docs/design/coarse_graining.md):
     every model tidem has is scaled per grain, but conduction between parcels of different k

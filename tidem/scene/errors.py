@@ -178,6 +178,8 @@ def format_validation_error(err: ValidationError, root: type[BaseModel]) -> list
             op = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}[kind]
             bound = next(iter(e.get("ctx", {}).values()), "?")
             msg = f"{path}: must be {op} {bound} (got {value})"
+            if path.endswith("temperature") and isinstance(value, (int, float)) and value < 200:
+                msg += f"; temperatures are in K ({value} °C is {value + 273.15:g} K)"
         elif kind == "literal_error":
             msg = f"{path}: {e['msg'].lower()} (got {value!r})"
         elif kind in ("union_tag_invalid", "union_tag_not_found"):

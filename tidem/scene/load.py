@@ -98,6 +98,7 @@ def apply_override(raw: dict, assignment: str | tuple[str, Any]) -> None:
     be followed raises ValueError naming the key and the fix."""
     if isinstance(assignment, tuple):
         key, value = assignment
+        value = _plain(value)
         key, text = key.strip(), repr(value)
     elif "=" not in assignment:
         raise ValueError(f"--set {assignment!r}: expected KEY=VALUE, e.g. outlet.speed=0.003")
@@ -144,6 +145,18 @@ def apply_override(raw: dict, assignment: str | tuple[str, Any]) -> None:
             node = node[part]
         else:
             node = node[part]
+
+
+def _plain(value: Any) -> Any:
+    """A Python API override as the TOML reader gives it: numpy scalars (np.int64 from np.arange, np.bool_)
+    as int, float and bool, numpy arrays and tuples as lists, throughout."""
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):  # numpy scalar or array
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
 
 
 def _key_text(parts: list) -> str:
