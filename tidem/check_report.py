@@ -7,6 +7,10 @@ import math
 
 from tidem.gas_geometry import convection_walls, gas_grid, voidage_layers
 from tidem.kernels.gas_band import band_width
+from tidem.output_size import cadence
+
+LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
+
 
 def mesh_convection_lines(model) -> list[str]:
     """`tidem check`'s line per heated mesh that gives heat to the gas: the surface it shows the gas
@@ -16,10 +20,10 @@ def mesh_convection_lines(model) -> list[str]:
     walls = convection_walls(gas_grid(model.scene), model.tubes, model.meshes, model.gas_cut)
     lines = []
     for k, m in enumerate(model.meshes):
-        mine = (walls["wall_k"] == len(model.tubes) + k) & (walls["wall_A"] > 0) if walls is not None else None
         if m.temperature is None:
             continue
-        shown = float(walls["wall_A"][mine].sum()) if mine is not None else 0.0
+        mine = (walls["wall_k"] == len(model.tubes) + k) & (walls["wall_A"] > 0) if walls is not None else False
+        shown = float(walls["wall_A"][mine].sum()) if walls is not None else 0.0
         if shown == 0.0:
             lines.append(f"note: {m.name} gives the gas no heat: its surface lies in no gas cell of its own (cells "
                          "beside a heated tube are the tube's, and sealed cells have no gas)")
@@ -35,7 +39,7 @@ def output_notes(model, snapshots: int) -> list[str]:
     an interval beyond t_end) and on a run of more than LONG_RUN steps."""
     out = model.scene.output
     steps = math.ceil(model.t_end / model.dt)
-    asked = out.snapshots if out.interval is None else math.floor(model.t_end / out.interval + 1e-9)
+    asked = math.floor(model.t_end / cadence(model.scene, model.t_end)[0] + 1e-9)
     notes = []
     if asked > steps:
         notes.append(f"note: {asked} snapshots asked for, but a run writes at most one a step: {snapshots} in "
@@ -47,9 +51,6 @@ def output_notes(model, snapshots: int) -> list[str]:
         notes.append(f"note: {steps:.3g} steps to t_end: at 1e7 particle-steps/s (2 CPU cores) about "
                      f"{steps * model.capacity / 1e7 / 86400:.3g} days; check numerics.dt and numerics.t_end")
     return notes
-
-
-LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
 
 
 def gas_notes(model) -> list[str]:

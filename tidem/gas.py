@@ -80,7 +80,8 @@ class GasPhase:
                                     MIN_OPEN, 1.0)
         self.layers = voidage_layers(model)
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
-        self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0), self.heat,
+        n_walls = len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0)  # wall_k of mesh k: tubes + k
+        self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, n_walls, self.heat,
                                                  self.sources, self.species, open_fraction, self.layers, self.band)
         G = self.G
         host = {"p": G.p, "gp2": G.gp[2], "eps": G.eps, **{f"u{c}": G.u[c] for c in range(3)}}

@@ -1,10 +1,10 @@
 """The gas grid of a scene's `[gas]` table, set-up side (plain numpy; the grid's index maths is
 `kernels/gas_grid.py`): cells of about `gas.cell_size`, the cells inside tubes (walls for the
 gas), the kind of every face (closed, interior, inlet at the bottom, outlet at the top), the
-inlet velocity of each bottom face, the tube (and heated mesh) surface each cell borders (gas-tube
-convection) and the share of each cell outside the tubes. Meshes cut the grid in `tidem.gas_mesh` (blocked
-faces, cells the gas cannot reach, open volume of cut cells); `gas_walls` puts tubes and meshes
-together.
+inlet velocity of each bottom face, the tube (and heated mesh) surface each cell borders
+(gas-tube convection) and the share of each cell outside the tubes. Meshes cut the grid in
+`tidem.gas_mesh` (blocked faces, cells the gas cannot reach, open volume of cut cells);
+`gas_walls` puts tubes and meshes together.
 """
 
 from __future__ import annotations

@@ -200,10 +200,9 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
             act = np.ones(count, bool)
             found = mesh_position_overlaps(scene, key, pos, 0.5 * d, meshes)
             trapped = np.flatnonzero(inside_bodies(pos, mesh_geo, None, _box_volume(dom.min, dom.max)))
-            found += [f"{key}.positions[{i}]: {np.round(pos[i], 6).tolist()} lies inside a body drawn as a mesh "
-                      "(a closed mesh, or a tube open at its ends, around it); move it out" + (f" ({len(trapped)} particles of this group lie "
-                                                                  "inside one)" if len(trapped) > 1 and i == trapped[0]
-                                                                  else "")
+            many = f" ({len(trapped)} particles of this group lie inside one)" if len(trapped) > 1 else ""
+            found += [f"{key}.positions[{i}]: {np.round(pos[i], 6).tolist()} lies inside a body drawn as a mesh (a "
+                      "closed mesh, or a tube open at its ends, around it); move it out" + (many if i == trapped[0] else "")
                       for i in trapped[:MAX_MESH_MESSAGES]]
             if found:
                 errors += found

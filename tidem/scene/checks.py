@@ -8,16 +8,22 @@ from tidem.scene.sizes import largest_diameter, max_diameter
 AXES = "xyz"
 
 
+def scene_temperatures(scene: Scene, fluxes: bool = False) -> list[tuple[str, float | None]]:
+    """(key, value) of every temperature the domain, particle groups, walls, tubes and meshes set (None
+    where unset); with `fluxes` each wall's and tube's heat_flux after its temperatures."""
+    temps = [("domain.wall_temperature", scene.domain.wall_temperature)]
+    temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
+    for name, items in (("walls", scene.walls), ("tubes", scene.tubes)):
+        temps += [(f"{name}[{i}].temperature", w.temperature) for i, w in enumerate(items)]
+        if fluxes:
+            temps += [(f"{name}[{i}].heat_flux", w.heat_flux) for i, w in enumerate(items)]
+    return temps + [(f"meshes[{i}].temperature", m.temperature) for i, m in enumerate(scene.meshes)]
+
+
 def heat_checks(scene: Scene) -> list[str]:
     """Temperatures need a [heat] table; heat needs conductivity and heat capacity of particles."""
     errs: list[str] = []
-    temps = [("domain.wall_temperature", scene.domain.wall_temperature)]
-    temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
-    temps += [(f"walls[{i}].temperature", w.temperature) for i, w in enumerate(scene.walls)]
-    temps += [(f"walls[{i}].heat_flux", w.heat_flux) for i, w in enumerate(scene.walls)]
-    temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
-    temps += [(f"tubes[{i}].heat_flux", t.heat_flux) for i, t in enumerate(scene.tubes)]
-    temps += [(f"meshes[{i}].temperature", m.temperature) for i, m in enumerate(scene.meshes)]
+    temps = scene_temperatures(scene, fluxes=True)
     if scene.heat is None:
         if scene.render.field == "temperature":
             errs.append("render.field: 'temperature' needs a [heat] table (particles have no temperature without it)")
@@ -48,12 +54,7 @@ def celsius_notes(scene: Scene) -> list[str]:
     (a note, not an error: a cryogenic bed is possible)."""
     if scene.heat is None:
         return []
-    temps = [("heat.initial_temperature", scene.heat.initial_temperature), ("domain.wall_temperature",
-                                                                             scene.domain.wall_temperature)]
-    temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
-    temps += [(f"walls[{i}].temperature", w.temperature) for i, w in enumerate(scene.walls)]
-    temps += [(f"tubes[{i}].temperature", t.temperature) for i, t in enumerate(scene.tubes)]
-    temps += [(f"meshes[{i}].temperature", m.temperature) for i, m in enumerate(scene.meshes)]
+    temps = [("heat.initial_temperature", scene.heat.initial_temperature), *scene_temperatures(scene)]
     if scene.gas is not None:
         temps += [("gas.inlet_temperature", scene.gas.inlet_temperature),
                   ("gas.initial_temperature", scene.gas.initial_temperature)]
