@@ -228,3 +228,85 @@ def test_a_round_tube_a_few_cells_across_is_sealed_though_its_staircase_has_gaps
     assert np.array_equal(sealed, solid_cells(gg, [{"c": [0.04, 0.0, 0.035], "mask": [1.0, 0.0, 1.0], "r": 0.0075}])[:, 0, :]), \
         "as the analytic tube's cells (centre inside)"
     assert c.blocked[2][8, 0, 8] == 0 and not inside[8, 7] and inside[9, 8], "the gap in the staircase"
+
+
+WEDGE = {"width": 0.048, "slot": 0.024, "plates_top": 0.06, "top": 0.08, "depth": 0.004, "bed": 0.036}
+
+
+def wedge_bed(tmp_path, cell: float, u: float = 0.3, d: float = 0.001, straight: bool = False):
+    """A tapered packed bed: fixed grains of diameter d on a cubic lattice (spacing d) between two plates that
+    lean 11.3 degrees from the vertical, from a 24 mm slot on the distributor to the side walls 60 mm up
+    (a periodic slab 48 mm wide and 4 mm deep), 36 mm of grains; gas at `u` over the slot, cells `cell`.
+    `straight`: the plates stand upright, 24 mm apart, and lids at 60 mm join them to the side walls (a
+    straight channel). Returns the raw scene, the open cross-section as a function of height [m^2] and the
+    grains' centres."""
+    from tests.conftest import make_scene
+
+    w, s, top_p, depth = WEDGE["width"], WEDGE["slot"], WEDGE["plates_top"], WEDGE["depth"]
+    x0 = (w - s) / 2
+    x_top = x0 if straight else 0.0
+    lo_y, hi_y = -0.001, depth + 0.001  # drawn past the period in y, clipped to it
+    quads = [((xa, 0.0), (xb, top_p)) for xa, xb in ((x0, x_top), (w - x0, w - x_top))]
+    if straight:
+        quads += [((0.0, top_p), (x0, top_p)), ((w - x0, top_p), (w, top_p))]
+    tri = []
+    for (xa, za), (xb, zb) in quads:
+        a, b, c, e = (xa, lo_y, za), (xa, hi_y, za), (xb, hi_y, zb), (xb, lo_y, zb)
+        tri += [[a, b, c], [a, c, e]]
+    tri = np.array(tri, float)
+    path = tmp_path / "wedge.stl"
+    pv.PolyData.from_regular_faces(tri.reshape(-1, 3), np.arange(len(tri) * 3).reshape(-1, 3)).save(str(path))
+
+    def half_width(z):
+        return 0.5 * s + (x0 - x_top) * np.minimum(z, top_p) / top_p
+
+    clear = 0.5 * d * np.hypot(x0 - x_top, top_p) / top_p  # a grain's centre this far inside the plate, horizontally
+    pos = []
+    for k in range(int(round(WEDGE["bed"] / d))):
+        z = (k + 0.5) * d
+        n = int(round(2 * (half_width(z) - clear) / d, 9)) + 1
+        xs = w / 2 + (np.arange(n) - (n - 1) / 2) * d
+        pos += [[x, y, z] for y in (np.arange(int(round(depth / d))) + 0.5) * d for x in xs]
+    sand = {"density": 2500.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.9, "friction": 0.3}
+    raw = make_scene(
+        domain={"min": [0, 0, 0], "max": [w, depth, WEDGE["top"]], "periodic": ["y"], "walls": "auto",
+                "gravity": [0, 0, -9.81]},
+        materials={"sand": sand},
+        particles=[{"name": "bed", "material": "sand", "diameter": {"value": d}, "fixed": True, "positions": pos}],
+        meshes=[{"file": str(path), "material": "sand"}],
+        gas={"cell_size": cell, "inlet_velocity": u, "coupling_interval": 1, "density": 1.2, "viscosity": 1.8e-5},
+        numerics={"dt": 5e-5, "force_dt": True},
+    )
+    return raw, (lambda z: 2 * half_width(z) * depth), np.array(pos)
+
+
+def tapered_drop(solver, area, pos, top: float = WEDGE["top"], d: float = 0.001) -> tuple[float, float]:
+    """(the gas's pressure drop, the one-dimensional Ergun integral over the open cross-section `area` plus the
+    weight of a gas column `top` high) [Pa] after 20 steps; the flow is read on the outlet faces."""
+    from tidem.analytic.ergun import tapered_bed_ergun
+
+    for _ in range(20):
+        solver.step()
+    gas = solver.gas
+    host = gas.host_fields()
+    h = gas.gg.h
+    flow = host["u2"][:, :, -1].sum() * h[0] * h[1]
+    return gas.pressure_drop(host), tapered_bed_ergun(pos[:, 2], d, area, top, flow, 1.8e-5, 1.2, d) + 1.2 * 9.81 * top
+
+
+def test_a_tapered_packed_bed_between_leaning_plates_against_the_ergun_integral(tmp_path, solver_for):
+    """The pressure drop of a packed bed in a wedge against the one-dimensional model of a tapered bed (Ergun's
+    gradient at each layer's voidage and at the flow over the wedge's width there; the flow across the taper,
+    tan(a)/a - 1 = 1 % at 11.3 degrees, is left out): 1.07-1.11 times the integral at 2-4 mm cells
+    (`benchmarks/mesh_scenes/tapered_ergun.py`, docs/validation.md), where a straight column of box walls gives
+    0.97-0.99. Two errors of the cut grid meet here: the gas enters a new column of cells beside a leaning plate
+    only from the side (the drop rises), and grains beside a mesh put part of their drag and volume in cells
+    the gas leaves out (the gas runs faster along the plates: the drop falls; docs/limitations.md). The band
+    fails if the cut leaks gas past the bed or seals a column."""
+    raw, area, pos = wedge_bed(tmp_path, cell=0.004)
+    solver = solver_for(raw)
+    assert solver.gas.cut.report_lines() == ["gas grid: 30 faces blocked by meshes, 42 cells the gas cannot reach (solid), "
+                                             "18 cut cells (open fraction 0.50-0.94, 4^3 sub-cells per cell)"]
+    drop, integral = tapered_drop(solver, area, pos)
+    assert 1.0 < drop / integral < 1.2
+    assert solver.gas.divergence * 0.004 / 0.3 < 1e-6
