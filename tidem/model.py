@@ -177,8 +177,9 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         raise SceneError(src, overlaps)
     dt, scales, errors = contact_time_step(scene, material, radius, placed.x0, placed.v0, placed.active0,
                                            walls, all_fixed)
-    if not errors and contacts:
-        errors = pass_through_errors(meshes, dt, impact_speed(scene, placed.v0), float(radius.min()))
+    if not errors and contacts:  # fixed particles never move: only a mesh's own motion can close on them
+        speed = 0.0 if all_fixed else impact_speed(scene, placed.v0)
+        errors = pass_through_errors(meshes, dt, speed, float(radius.min()))
     if errors:
         raise SceneError(src, errors)
 

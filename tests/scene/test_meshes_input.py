@@ -450,3 +450,26 @@ def test_flat_patches_join_a_plane_and_keep_the_facets_of_a_curve():
     bent = np.c_[xx.ravel(), yy.ravel(), 1e-3 * xx.ravel() ** 2]  # slope turning 0.05 mrad a column
     sheet = pv.PolyData(bent).delaunay_2d()
     assert len(set(flat_patches(bent, sheet.regular_faces))) == sheet.n_cells
+
+
+def test_a_step_that_could_carry_a_particle_through_a_sheet_is_refused_unless_nothing_moves(tmp_path):
+    """A 1 mm grain over a sheet, the time step forced to 5e-4 s: the grain's impact speed (a fall across the
+    1 m box, 4.43 m/s) closes 2.2 mm a step, more than 0.2 of its radius, so the step is refused with the
+    step that would do (0.2 x 0.5 mm / 4.43 m/s);
+    with the grain fixed it never moves and the step stands, unless the mesh itself turns fast enough."""
+    from tidem.model import build_model
+
+    path = write_stl(tmp_path / "sheet.stl", [[[-0.4, -0.4, 0.0], [0.4, -0.4, 0.0], [0.4, 0.4, 0.0]]])
+    raw = raw_scene(meshes=[{"file": str(path), "material": "steel"}], numerics={"dt": 5e-4, "force_dt": True})
+    raw["particles"][0].update(diameter=0.001, positions=[[0.0, 0.0, 0.1]])
+    raw["domain"]["walls"] = "none"
+    with pytest.raises(SceneError) as exc:
+        build_model(validate(raw))
+    (msg,) = exc.value.messages
+    assert msg.startswith("meshes[0]: a particle could close 0.00221 m on it in one step of 0.0005 s") and \
+        msg.endswith("lower numerics.dt_fraction (or numerics.dt) to below 2.26e-05 s")
+    raw["particles"][0]["fixed"] = True
+    build_model(validate(raw))
+    raw["meshes"][0]["rotation"] = {"center": [0.0, 0.0, 0.0], "axis": [0.0, 0.0, 1.0], "speed": 1.0}
+    with pytest.raises(SceneError, match=r"lower rotation.speed or velocity \(the mesh's fastest point moves at 0.566 m/s"):
+        build_model(validate(raw))
