@@ -6,15 +6,7 @@ import json
 import sys
 from pathlib import Path
 
-
-def flat(observables: dict) -> dict:
-    """run.json's observables as one level of name -> number (lists and text left out)."""
-    rows = {}
-    for group in observables.values():
-        for name, value in group.items():
-            if isinstance(value, (int, float)) and not isinstance(value, bool):
-                rows[name] = float(value)
-    return rows
+from tidem.observables import flatten
 
 
 def read(run: Path) -> dict | None:
@@ -34,7 +26,7 @@ def compare(scene: str, gpu: dict | None, cpu: dict | None) -> list[str]:
         return lines
     if gpu["particle_steps_per_s"] and cpu["particle_steps_per_s"]:
         lines.append(f"  gpu / cpu rate: {gpu['particle_steps_per_s'] / cpu['particle_steps_per_s']:.2f}")
-    a, b = flat(gpu.get("observables", {})), flat(cpu.get("observables", {}))
+    a, b = flatten(gpu.get("observables", {})), flatten(cpu.get("observables", {}))
     for name in sorted(a.keys() & b.keys()):
         scale = max(abs(a[name]), abs(b[name]))
         rel = abs(a[name] - b[name]) / scale if scale else 0.0

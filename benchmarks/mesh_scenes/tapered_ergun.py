@@ -27,6 +27,8 @@ from tests.test_gas_mesh import tapered_drop, wedge_bed  # noqa: E402
 from tidem.runtime import ensure_taichi  # noqa: E402
 
 R0, R1, H, FACETS, HALF = 0.012, 0.024, 0.08, 64, 0.026
+SAND = {"density": 2500.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.9, "friction": 0.3}
+GAS = {"inlet_velocity": 0.3, "coupling_interval": 1, "density": 1.2, "viscosity": 1.8e-5}
 
 
 def polygon_area(r):
@@ -75,9 +77,6 @@ def column_bed(cell: float):
         gas=dict(GAS, cell_size=cell), numerics={"dt": 5e-5, "force_dt": True})
     return raw, (lambda z: np.full_like(z, 0.024**2)), 0.08
 
-
-SAND = {"density": 2500.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.9, "friction": 0.3}
-GAS = {"inlet_velocity": 0.3, "coupling_interval": 1, "density": 1.2, "viscosity": 1.8e-5}
 
 
 def held_share(solver, grains: int) -> float:
