@@ -31,6 +31,9 @@ is interpolated between the inlet face (T_in) and the bottom cell: the lattice p
 the bottom cell c takes the mirror value 2 T_in - T_c (a convex combination for any particle
 above the distributor, so no overshoot). That share of the exchange, w H_p (T_p - 2 T_in + T_c),
 is charged to the bottom cell (T_c implicit), so the heat exchanged still balances exactly.
+With tubes or meshes in the gas every one of these weights is taken over the cells and faces the gas
+flows in (`kernels/gas_weights.py`): a grain beside a wall neither puts its volume, drag and heat where
+the gas never sees them nor reads the gas there.
 Because interpolation and deposition share weights that sum to 1, the drag the gas feels,
 sum_f B_f u_f - Bv_f, equals minus the sum of the particle drag forces at the gas step
 (momentum exchange balances exactly), and likewise for heat.
@@ -42,6 +45,7 @@ import taichi as ti
 
 from .drag import make_drag, make_nusselt
 from .gas_grid import layer_grid, make_cic, serial_loops
+from .gas_weights import make_gas_weights, make_in_gas, plain_weights
 from .ordered import in_order
 
 MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas_limits`)
@@ -82,7 +86,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     closures of MFiX's CGDEM and CFDEM's coarse-grained models), which keeps the grains'
     terminal velocity, drag relaxation time and lumped heating time; the pressure-gradient
     force and the voidage take the parcel's volume, k^3 grains' volume. With `cut_cells` (meshes or
-    tubes in the gas) the voidage is taken over each cell's open volume G.open. With `layers` > 1
+    tubes in the gas) the voidage is taken over each cell's open volume G.open, and the weights over the
+    cells and faces the gas flows in (`kernels/gas_weights.py`). With `layers` > 1
     (G.solid_layer allocated) a grain's voidage comes from horizontal layers `layers` times thinner
     than a gas cell (`layered_voidage`)."""
     cic, corner, weight, corners = make_cic(gg)
@@ -93,6 +98,15 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         lcic, lcorner, lweight, lcorners = make_cic(lg)
         inv_lvol = 1.0 / lg.volume
         lself, cself = make_self_share(lcorner), make_self_share(corner)
+    share, gweight, gself = plain_weights(weight)
+    lshare = lgweight = lgself = None
+    if cut_cells:
+        in_gas, in_gas_layer = make_in_gas(gg, G, layers)
+        share, gweight, gself = make_gas_weights(corner, weight, corners, in_gas)
+        if layered:
+            lshare, lgweight, lgself = make_gas_weights(lcorner, lweight, lcorners, in_gas_layer)
+    elif layered:
+        lshare, lgweight, lgself = plain_weights(lweight)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
     inv_vol = 1.0 / gg.volume
@@ -111,9 +125,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         out = ti.Vector([0.0, 0.0, 0.0])
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
+            s, m = share(base, frac, c)
             for o_t in ti.static(corners(c)):
                 o = ti.Vector(o_t)
-                out[c] += weight(frac, o, c) * F[c][corner(base, o, c)]
+                out[c] += gweight(base, frac, o, c, s, m) * F[c][corner(base, o, c)]
         return out
 
     @ti.func
@@ -130,19 +145,21 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         out = ti.Vector([0.0, 0.0, 0.0])
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
+            s, m = share(base, frac, c)
             for o_t in ti.static(corners(c)):
                 o = ti.Vector(o_t)
                 J = corner(base, o, c)
-                out[c] += weight(frac, o, c) * face_voidage(J, c) * U[c][J]
+                out[c] += gweight(base, frac, o, c, s, m) * face_voidage(J, c) * U[c][J]
         return out
 
     @ti.func
     def sample_cells(F: ti.template(), x):
         base, frac = cic(x, -1)
+        s, m = share(base, frac, -1)
         out = 0.0
         for o_t in ti.static(corners(-1)):
             o = ti.Vector(o_t)
-            out += weight(frac, o, -1) * F[corner(base, o, -1)]
+            out += gweight(base, frac, o, -1, s, m) * F[corner(base, o, -1)]
         return out
 
     @ti.func
@@ -154,6 +171,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     def sample_temperature(x):
         """T_g at x, with the mirror value 2 T_in - T_c below the bottom cell over the inlet."""
         base, frac = cic(x, -1)
+        s, m = share(base, frac, -1)
         out = 0.0
         for o_t in ti.static(corners(-1)):
             o = ti.Vector(o_t)
@@ -161,7 +179,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             t = G.T[J]
             if below_inlet(base, o, J):
                 t = 2.0 * t_in - G.T[J]
-            out += weight(frac, o, -1) * t
+            out += gweight(base, frac, o, -1, s, m) * t
         return out
 
     @ti.func
@@ -177,6 +195,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         structure factor at zero wave number of its neighbours' solid fraction phi (a loose suspension, S0 -> 1:
         a lone grain sees the cell voidage; a packed bed, S0 -> 0: the layer voidage as it is)."""
         base, frac = lcic(x, -1)
+        s, m = lshare(base, frac, -1)
         eps_l = 0.0
         open_l = 0.0
         for o_t in ti.static(lcorners(-1)):
@@ -184,13 +203,14 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             J = lcorner(base, o, -1)
             open_vol = 1.0
             if ti.static(cut_cells):
-                open_vol = G.open[J[0], J[1], J[2] // layers]
-            w = lweight(frac, o, -1)
+                open_vol = G.open_layer[J]
+            w = lgweight(base, frac, o, -1, s, m)
             eps_l += w * (1.0 - G.solid_layer[J] * inv_lvol / open_vol)
             open_l += w * open_vol
-        own_l = vp * inv_lvol / open_l * lself(base, frac)
+        own_l = vp * inv_lvol / open_l * (lgself(base, frac, s) if m else lself(base, frac))
         cbase, cfrac = cic(x, -1)
-        own_c = vp * inv_vol / open_l * cself(cbase, cfrac)
+        cs, cm = share(cbase, cfrac, -1)
+        own_c = vp * inv_vol / open_l * (gself(cbase, cfrac, cs) if cm else cself(cbase, cfrac))
         phi = ti.min(ti.max(1.0 - eps_l - own_l, 0.0), 1.0)
         s0 = (1.0 - phi) ** 4 / (1.0 + 2.0 * phi) ** 2
         return ti.min(ti.max(eps_l + s0 * (own_l - own_c), min_voidage), 1.0)
@@ -212,14 +232,16 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             if S.active[i]:
                 base, frac = cic(S.x[i], -1)
                 vp = volume(i)
+                s, m = share(base, frac, -1)
                 for o_t in ti.static(corners(-1)):
                     o = ti.Vector(o_t)
-                    G.solid_vol[corner(base, o, -1)] += weight(frac, o, -1) * vp
+                    G.solid_vol[corner(base, o, -1)] += gweight(base, frac, o, -1, s, m) * vp
                 if ti.static(layered):
                     base, frac = lcic(S.x[i], -1)
+                    s, m = lshare(base, frac, -1)
                     for o_t in ti.static(lcorners(-1)):
                         o = ti.Vector(o_t)
-                        G.solid_layer[lcorner(base, o, -1)] += lweight(frac, o, -1) * vp
+                        G.solid_layer[lcorner(base, o, -1)] += lgweight(base, frac, o, -1, s, m) * vp
         if ti.static(serial):
             ti.loop_config(serialize=True)
         for I in ti.grouped(ti.ndrange(*cells)):
@@ -236,9 +258,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         k = S.gK[i]
         for c in ti.static(range(3)):
             base, frac = cic(x, c)
+            s, m = share(base, frac, c)
             for o_t in ti.static(corners(c)):
                 o = ti.Vector(o_t)
-                wk = weight(frac, o, c) * k
+                wk = gweight(base, frac, o, c, s, m) * k
                 J = corner(base, o, c)
                 if ti.static(layered):
                     B[c][J] += wk * face_voidage(J, c) / S.geps[i]
@@ -248,10 +271,11 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         if ti.static(heat):
             hp = S.gH[i]
             base, frac = cic(x, -1)
+            s, m = share(base, frac, -1)
             for o_t in ti.static(corners(-1)):
                 o = ti.Vector(o_t)
                 J = corner(base, o, -1)
-                wh = weight(frac, o, -1) * hp
+                wh = gweight(base, frac, o, -1, s, m) * hp
                 if below_inlet(base, o, J):
                     G.H[J] -= wh
                     G.HT[J] += wh * (S.T[i] - 2.0 * t_in)

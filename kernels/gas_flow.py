@@ -58,14 +58,15 @@ def cg_batch() -> int:
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
                       tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
                       conduction: bool = False, wall_grain: float = 0.0,
-                      wall_umf: float = 0.0, band: int = 0):
+                      wall_umf: float = 0.0, band: int = 0, open_faces: bool = False):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas_fields`); `tube_walls`
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy;
     with `wall_grain` > 0, the grains' diameter, the packed-bed term in the particle-filled share, its
     velocity capped at `wall_umf`),
     `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
     `conduction` Fourier conduction through the gas; `band` > 0 (`gas_band.band_width`) adds the direct
-    pressure solve band_solve (fields band, band_y)."""
+    pressure solve band_solve (fields band, band_y). With `open_faces` (tubes or meshes in the gas) a face's drag
+    B_f, Bv_f acts over its open volume, G.open_face[c] times the face's volume (`tidem.gas_open_volume`)."""
     cic, corner, weight, corners = make_cic(gg)
     n = gg.cells
     small = serial_solve(n[0] * n[1] * n[2])
@@ -145,9 +146,12 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                     for a in ti.static(range(3)):
                         e = unit(a)
                         lap += (U[c][face_index(I + e, c)] - 2.0 * U[c][I] + U[c][face_index(I - e, c)]) / (h[a] * h[a])
-                    b = G.B[c][I] / vol
+                    inv_vol = 1.0 / vol
+                    if ti.static(open_faces):
+                        inv_vol /= G.open_face[c][I]
+                    b = G.B[c][I] * inv_vol
                     denom = rho * ef + dt * b
-                    US[c][I] = (rho * ef * (u_adv + dt * (nu * lap + g[c])) + dt * G.Bv[c][I] / vol) / denom
+                    US[c][I] = (rho * ef * (u_adv + dt * (nu * lap + g[c])) + dt * G.Bv[c][I] * inv_vol) / denom
                     A[c][I] = dt * ef / denom
                     coef = ef * A[c][I] / (h[c] * h[c])
                     if kind == OUTLET:

@@ -27,10 +27,10 @@ from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas_fields import allocate_gas_fields
-from tidem.gas_mesh import MIN_OPEN
-from tidem.gas_geometry import (convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter, tube_open_fraction,
+from tidem.gas_geometry import (convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter,
                                  voidage_layers)
 from tidem.gas_limits import MAX_COURANT
+from tidem.gas_open_volume import open_volumes
 from tidem.phases import PhaseTimer, clock
 from tidem.species import M_O2, o2_mass_fraction
 
@@ -74,15 +74,13 @@ class GasPhase:
         walls = convection_walls(gg, model.tubes, model.meshes, self.cut) \
             if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
-        open_fraction = tube_open_fraction(gg, model.tubes, self.solid)
-        if self.cut is not None:
-            open_fraction = np.clip(self.cut.open_fraction * (1.0 if open_fraction is None else open_fraction),
-                                    MIN_OPEN, 1.0)
         self.layers = voidage_layers(model)
+        self.open = open_volumes(gg, self.solid, self.kinds, model.tubes, self.cut, self.layers)
+        self.open_fraction = None if self.open is None else self.open["cells"]
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
         n_walls = len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0)  # wall_k of mesh k: tubes + k
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, n_walls, self.heat,
-                                                 self.sources, self.species, open_fraction, self.layers, self.band)
+                                                 self.sources, self.species, self.open, self.layers, self.band)
         G = self.G
         host = {"p": G.p, "gp2": G.gp[2], "eps": G.eps, **{f"u{c}": G.u[c] for c in range(3)}}
         host.update({name: getattr(G, name) for name, on in (("T", self.heat), ("Y", self.species),
@@ -99,13 +97,14 @@ class GasPhase:
         self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
-                                      self.heat and gas.conduction, wall_grain, wall_umf, self.band)
+                                      self.heat and gas.conduction, wall_grain, wall_umf, self.band,
+                                      self.open is not None)
         self.serial_solve = serial_solve(self.solid.size)  # as make_flow_kernels decided
         self.cg_batch = cg_batch()
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
-            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, open_fraction is not None,
+            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, self.open is not None,
             self.layers)
         if self.species:
             ox = gas.oxygen

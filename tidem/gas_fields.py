@@ -30,11 +30,13 @@ from tidem.kernels.gas_grid import GasGrid
 
 
 def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarray], walls: dict | None,
-                        n_walls: int, heat: bool, sources: bool, species: bool, open_fraction: np.ndarray | None = None,
-                        layers: int = 1, band: int = 0):
+                        n_walls: int, heat: bool, sources: bool, species: bool,
+                        open_volumes: dict[str, np.ndarray] | None = None, layers: int = 1, band: int = 0):
     """Place the fields a scene's gas needs and fill the fixed ones (solid cells, face kinds,
     tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree). With `layers` > 1,
     solid_layer: the solid volume on cells cut into that many horizontal layers (`kernels/gas_coupling.py`). With
+    `open_volumes` (tubes or meshes, `tidem.gas_open_volume.open_volumes`) the open volume over the volume of each
+    cell (open), face (open_face) and layer (open_layer). With
     `band` = w > 0, band (cells x w + 1) and band_y (cells) for the direct pressure solve (`kernels/gas_band.py`)."""
     G = SimpleNamespace()
     fb = ti.FieldsBuilder()
@@ -45,7 +47,7 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         cell_names += ["Qs"]
     if species:
         cell_names += ["Y", "Y_new", "o2_sink"]
-    if open_fraction is not None:
+    if open_volumes is not None:
         cell_names += ["open"]
     for name in cell_names:
         setattr(G, name, ti.field(fp))
@@ -53,6 +55,9 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
     if layers > 1:
         G.solid_layer = ti.field(fp)
         fb.dense(ti.ijk, (gg.cells[0], gg.cells[1], gg.cells[2] * layers)).place(G.solid_layer)
+        if open_volumes is not None:
+            G.open_layer = ti.field(fp)
+            fb.dense(ti.ijk, open_volumes["layers"].shape).place(G.open_layer)
     G.solid = ti.field(ti.i32)
     fb.dense(ti.ijk, gg.cells).place(G.solid)
     if band:
@@ -66,6 +71,10 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         for c in range(3):
             fb.dense(ti.ijk, gg.face_shape(c)).place(comps[c])
         setattr(G, name, comps)
+    if open_volumes is not None:
+        G.open_face = [ti.field(fp) for _ in range(3)]
+        for c in range(3):
+            fb.dense(ti.ijk, gg.face_shape(c)).place(G.open_face[c])
     G.inlet = ti.field(fp)
     fb.dense(ti.ij, gg.cells[:2]).place(G.inlet)
     G.sums = ti.field(fp)
@@ -86,8 +95,12 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         fb.dense(ti.i, 3).place(G.bsum)
     tree = fb.finalize()
     G.solid.from_numpy(solid)
-    if open_fraction is not None:
-        G.open.from_numpy(open_fraction)
+    if open_volumes is not None:
+        G.open.from_numpy(open_volumes["cells"])
+        for c in range(3):
+            G.open_face[c].from_numpy(open_volumes[f"faces{c}"])
+        if layers > 1:
+            G.open_layer.from_numpy(open_volumes["layers"])
     if walls is not None:
         for name, values in walls.items():
             getattr(G, name).from_numpy(values)

@@ -1,17 +1,17 @@
 """The gas grid of a scene's `[gas]` table, set-up side (plain numpy; the grid's index maths is
 `kernels/gas_grid.py`): cells of about `gas.cell_size`, the cells inside tubes (walls for the
 gas), the kind of every face (closed, interior, inlet at the bottom, outlet at the top), the
-inlet velocity of each bottom face, the tube (and heated mesh) surface each cell borders
-(gas-tube convection) and the share of each cell outside the tubes. Meshes cut the grid in
-`tidem.gas_mesh` (blocked faces, cells the gas cannot reach, open volume of cut cells);
-`gas_walls` puts tubes and meshes together.
+inlet velocity of each bottom face and the tube (and heated mesh) surface each cell borders
+(gas-tube convection). Meshes cut the grid in `tidem.gas_mesh` (blocked faces, cells the gas cannot
+reach, open volume of cut cells); `gas_walls` puts tubes and meshes together; the open volume each
+cell's voidage is taken over is `tidem.gas_open_volume`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from tidem.gas_mesh import MIN_OPEN, GasCut, gas_cut
+from tidem.gas_mesh import GasCut, gas_cut
 from tidem.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET
 from tidem.kernels.gas_grid import GasGrid
@@ -46,33 +46,6 @@ def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:
         nearest = idx[np.argmin(dist2)]
         inside = (idx[:, across] == nearest[across]).all(axis=1)
     return inside.reshape(gg.cells)
-
-
-def tube_open_fraction(gg: GasGrid, tubes: list[dict], solid: np.ndarray, sub: int = 16) -> np.ndarray | None:
-    """Share of each fluid cell outside every tube (1 where no tube reaches; None without tubes),
-    from sub x sub points across each tube's axis, at least `gas_mesh.MIN_OPEN`: a cell beside a
-    tube holds part of it, so its voidage is taken over the rest, as over a mesh's cut cells."""
-    if not tubes:
-        return None
-    outside = np.ones(gg.cells)
-    idx = np.indices(gg.cells).reshape(3, -1).T
-    lo, h = np.asarray(gg.lo), np.asarray(gg.h)
-    centres = lo + (idx + 0.5) * h
-    offsets = (np.arange(sub) + 0.5) / sub - 0.5
-    for t in tubes:
-        mask = np.asarray(t["mask"])
-        across = np.flatnonzero(mask > 0)
-        d = (centres - np.asarray(t["c"])) * mask
-        near = np.einsum("ij,ij->i", d, d) < (t["r"] + np.linalg.norm(h[across])) ** 2
-        share = np.zeros(near.sum())
-        for oa in offsets:
-            for ob in offsets:
-                pa = d[near, across[0]] + oa * h[across[0]]
-                pb = d[near, across[1]] + ob * h[across[1]]
-                share += (pa * pa + pb * pb >= t["r"] ** 2)
-        flat = outside.reshape(-1)
-        flat[near] *= share / sub**2
-    return np.where(solid == 1, 1.0, np.clip(outside, MIN_OPEN, 1.0))
 
 
 def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:

@@ -379,22 +379,3 @@ def test_tube_to_gas_convection_in_a_packed_bed_is_the_correlation(solver_for, c
         h = h_cb * eps
     expected = float((h * area[around] * (t_wall[around] - temp)).sum())
     assert float(G.G.wall_rate.to_numpy()[0]) == pytest.approx(expected, rel=1e-9)
-
-
-def test_cells_beside_a_tube_keep_the_share_outside_it():
-    """Open fraction of the fluid cells a tube reaches into (16 x 16 points across its axis): the
-    volume they lose is the tube's cross-section outside its solid cells (a fine raster), x L."""
-    from tidem.gas_geometry import solid_cells, tube_open_fraction
-    from tidem.kernels.gas_grid import GasGrid
-
-    gg = GasGrid(lo=(0.0, 0.0, 0.0), cells=(6, 1, 10), h=(0.004, 0.004, 0.004), periodic=(False, True, False))
-    tube = {"c": [0.012, 0.0, 0.015], "mask": [1.0, 0.0, 1.0], "r": 0.0043, "T": 400.0}
-    solid = solid_cells(gg, [tube])
-    f = tube_open_fraction(gg, [tube], solid)
-    assert (f[solid == 1] == 1.0).all() and f.min() < 0.9
-    lost = float(((1.0 - f) * gg.volume).sum())
-    x, z = np.meshgrid((np.arange(2400) + 0.5) * 1e-5, (np.arange(4000) + 0.5) * 1e-5, indexing="ij")
-    in_tube = (x - 0.012) ** 2 + (z - 0.015) ** 2 < tube["r"] ** 2
-    in_solid = solid[(x / 0.004).astype(int), 0, (z / 0.004).astype(int)] == 1
-    expected = float((in_tube & ~in_solid).sum()) * 1e-10 * 0.004
-    assert lost == pytest.approx(expected, rel=0.03)
