@@ -1,15 +1,16 @@
-"""Cloud-in-cell weights over the lattice points the gas flows in (`kernels/gas_coupling.py`).
+"""Cloud-in-cell weights over the lattice points the gas's exchange uses (`kernels/gas_coupling.py`).
 
 A grain beside a tube or a mesh reaches, with its CIC cube, cells the gas leaves out (inside a tube, or
-sealed off behind a mesh) and faces a tube or mesh closes. The plain weights would put part of its volume,
-drag and heat there, where the gas never sees them, and read back voidage, velocity and temperature from
-there: in a packed bed between two mesh plates the gas ran along the plates at 1.5 times the middle's
-velocity and the bed's pressure drop fell to 0.74 of Ergun's (docs/validation.md). With these weights a
-grain's CIC cube keeps only the points in the gas, each weight divided by their sum, so that its volume,
-drag and heat all reach the gas and what it reads is the gas's; the box's own walls are treated as before
-(their faces are clamped onto, as in a scene without tubes and meshes). Where every point of the cube is
-in the gas the weights are the plain ones, to the bit; where none is (a grain sealed off with its cell)
-the plain ones too.
+sealed off behind a mesh) and faces inside them. The plain weights would put part of its volume, drag and
+heat there, where the gas never sees them, and read back voidage, velocity and temperature from there: in
+a packed bed between two mesh plates the gas ran along the plates at 1.5 times the middle's velocity and
+the bed's pressure drop fell to 0.74 of Ergun's (docs/validation.md). With these weights a grain's CIC
+cube keeps only the points the exchange uses, each weight divided by their sum, so that its volume, drag
+and heat all reach the gas and what it reads is the gas's. A wall's own face, where it bounds a cell of
+the gas, stays a point: the gas's normal velocity there is zero, as on the box's own walls (which are
+treated as before). Where every point of the cube counts the weights are the plain ones, to the bit;
+where none does (a grain sealed off with its cell) the plain ones too. The open volume the voidage and
+drag are then taken over is `tidem.gas_open_volume`'s (docs/design/near_wall_weights.md).
 """
 
 import taichi as ti

@@ -1,8 +1,9 @@
-"""The open volume each gas cell's voidage is taken over, beside tubes and meshes (`kernels/gas_coupling.py`).
+"""The open volume each gas cell's voidage, each face's drag and each layer's voidage are taken over, beside
+tubes and meshes (`kernels/gas_coupling.py`, `kernels/gas_flow.py`).
 
 A grain hands its volume to the cells with its cloud-in-cell weights taken over the cells the gas flows in
 (`kernels/gas_weights.py`). Grains packed at solid fraction phi all through the space outside the tubes
-and meshes then put phi V_c^open into cell c, with
+and meshes then put phi V_c^open into cell c (and their drag on a face likewise), with
 
     V_c^open = integral over the open space of w~_c(x) dx,
 
@@ -11,7 +12,7 @@ eps_c = 1 - sum_p w~_pc V_p / V_c^open is 1 - phi at any wall, however the wall 
 cell's own open share f_c V is not that volume beside a wall:
 - a tube's solid cells (their centre inside it) keep part of their volume outside it, 31 of 192 mm^2
   of fluidized_tube's cross-section. The grains there give their volume to the cells beside, which
-  then read up to a sixth denser than the bed is;
+  then read up to 1.3 times as dense as the bed is (`tests/test_gas_open_volume.py`);
 - the cells beside a cut cell take its grains in proportion to the weights, not to its open share.
 
 Away from walls V_c^open = V, which the weights' partition of unity gives exactly; there the integral is
@@ -79,7 +80,6 @@ def face_in_gas(gg: GasGrid, kind: np.ndarray, solid: np.ndarray, c: int) -> np.
     """The faces normal to c the gas's weights use (`kernels/gas_weights.make_in_gas`): not closed, or closed
     but bounding a cell of the gas (a wall's face, normal velocity 0)."""
     fluid = ~solid.astype(bool)
-    n = gg.cells[c]
     if gg.periodic[c]:
         bounds = fluid | np.roll(fluid, 1, axis=c)
     else:
@@ -89,7 +89,6 @@ def face_in_gas(gg: GasGrid, kind: np.ndarray, solid: np.ndarray, c: int) -> np.
         pad[c] = (0, 1)
         above = np.pad(fluid, pad)  # the cell above face j is j (none above face n)
         bounds = below | above
-        assert bounds.shape[c] == n + 1
     return (kind != CLOSED) | bounds
 
 
