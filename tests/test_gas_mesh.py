@@ -196,7 +196,7 @@ def test_gas_through_a_slot_keeps_its_flux_and_cut_cells_keep_the_particle_volum
     assert uz[3:5, :, 4].mean() == pytest.approx(4 * u, rel=1e-6)
     assert uz[:, :, 7].mean() == pytest.approx(u, rel=1e-6)  # above the grains, voidage 1
     # the open-volume voidage of the cut cells holds the grains' whole volume
-    f, eps = gas.open_fraction, G.eps.to_numpy()
+    f, eps = gas.open["cells"], G.eps.to_numpy()
     held = ((1.0 - eps) * f).sum() * 1e-6
     assert held == pytest.approx(3 * np.pi / 6 * 0.004**3, rel=1e-9)
     assert gas.pressure_drop() > 0.0

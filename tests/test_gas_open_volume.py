@@ -82,7 +82,7 @@ def test_a_uniform_bed_around_a_tube_has_the_same_voidage_and_drag_beside_it_as_
     expected = np.pi / 6 * 1e-12 / 0.0005**3
     assert np.abs(solid_fraction / expected - 1.0).max() < 0.04
     own = cut_share(gas.gg, solver.model.tubes, None)[fluid]
-    held = solid_fraction * gas.open_fraction[fluid]  # each cell's grains' volume over its whole volume
+    held = solid_fraction * gas.open["cells"][fluid]  # each cell's grains' volume over its whole volume
     assert (held / own / expected).max() > 1.25
     plain = []
     for c in (0, 2):  # the grains' drag coefficient on the open faces normal to x and z, off the box's sides

@@ -76,7 +76,6 @@ class GasPhase:
         self.walls = walls is not None
         self.layers = voidage_layers(model)
         self.open = open_volumes(gg, self.solid, self.kinds, model.tubes, self.cut, self.layers)
-        self.open_fraction = None if self.open is None else self.open["cells"]
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
         n_walls = len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0)  # wall_k of mesh k: tubes + k
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, n_walls, self.heat,

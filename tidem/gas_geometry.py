@@ -97,6 +97,17 @@ def mesh_gas_cut(scene, tubes: list[dict], meshes: list) -> tuple[GasCut | None,
                  "openings (a face is closed where a mesh cuts half of it)"]
 
 
+def shifted(gg: GasGrid, mask: np.ndarray, a: int, shift: int) -> np.ndarray:
+    """`mask` moved `shift` (+1 or -1) cells along axis a: wrapped on a periodic axis, False coming in
+    from an open side."""
+    out = np.roll(mask, shift, axis=a)
+    if not gg.periodic[a]:
+        edge = [slice(None)] * 3
+        edge[a] = 0 if shift == 1 else -1
+        out[tuple(edge)] = False
+    return out
+
+
 def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
     """Per cell, the surface of a heated tube that the cell borders, for gas-tube convection:
     wall_A [m^2] (the faces it shares with that tube's solid cells, scaled so that each tube's
@@ -112,12 +123,7 @@ def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
         borders = np.zeros(gg.cells)
         for a in range(3):
             for shift in (1, -1):
-                nb = np.roll(inside, shift, axis=a)
-                if not gg.periodic[a]:  # no wrap-around on open axes
-                    edge = [slice(None)] * 3
-                    edge[a] = 0 if shift == 1 else -1
-                    nb[tuple(edge)] = False
-                borders += (nb & ~inside) * face_area[a]
+                borders += (shifted(gg, inside, a, shift) & ~inside) * face_area[a]
         axis = int(np.flatnonzero(np.asarray(t["mask"]) == 0.0)[0])
         true_area = 2 * np.pi * t["r"] * gg.cells[axis] * gg.h[axis]
         mine = borders > 0

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tidem.gas_geometry import shifted
 from tidem.gas_mesh import MIN_OPEN, GasCut
 from tidem.kernels.gas_grid import CLOSED, GasGrid, layer_grid
 
@@ -123,21 +124,9 @@ def near_tubes(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
 def grow(gg: GasGrid, mask: np.ndarray, by: int) -> np.ndarray:
     """Cells within `by` cells (per axis) of a cell of `mask`, wrapping across periodic axes."""
     out = mask.copy()
-    for a in range(3):
-        step = out.copy()
-        for s in range(1, min(by, gg.cells[a] - 1) + 1):  # shifts that leave some cells on the grid
-            for sign in (1, -1):
-                if gg.periodic[a]:
-                    step |= np.roll(out, sign * s, axis=a)
-                else:
-                    shifted = np.zeros_like(out)
-                    src = [slice(None)] * 3
-                    dst = [slice(None)] * 3
-                    src[a] = slice(0, gg.cells[a] - s) if sign > 0 else slice(s, None)
-                    dst[a] = slice(s, None) if sign > 0 else slice(0, gg.cells[a] - s)
-                    shifted[tuple(dst)] = out[tuple(src)]
-                    step |= shifted
-        out = step
+    for _ in range(by):
+        for a in range(3):
+            out = out | shifted(gg, out, a, 1) | shifted(gg, out, a, -1)
     return out
 
 

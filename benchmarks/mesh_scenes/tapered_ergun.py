@@ -86,7 +86,7 @@ def held_share(solver, grains: int) -> float:
     if gas.cut is None:
         return 1.0
     fluid = ~gas.cut.unreachable.astype(bool)
-    held = ((1 - host["eps"]) * gas.open_fraction)[fluid].sum() * float(np.prod(gas.gg.h))
+    held = ((1 - host["eps"]) * gas.open["cells"])[fluid].sum() * float(np.prod(gas.gg.h))
     return held / (grains * math.pi / 6 * 1e-9)
 
 
