@@ -25,14 +25,18 @@ _TUPLE_FIX = "write 3 numbers [x, y, z] for a point or vector, 2 [low, high] for
 
 
 class SceneError(Exception):
-    """A scene file that cannot be run; `messages` holds one line per problem."""
+    """A scene file that cannot be run; `messages` holds one line per problem. `unread`: the file itself could
+    not be found or read (one line, "SOURCE: problem", rather than a count of errors in a scene never read)."""
 
-    def __init__(self, source: str, messages: list[str]):
+    def __init__(self, source: str, messages: list[str], unread: bool = False):
         self.source = source
         self.messages = messages
+        self.unread = unread
         super().__init__(self.render())
 
     def render(self) -> str:
+        if self.unread:
+            return "\n".join(f"{self.source}: {m}" for m in self.messages)
         n = len(self.messages)
         head = f"{self.source}: {n} error{'s' if n != 1 else ''} in the scene"
         return "\n".join([head] + [f"  {m}" for m in self.messages])

@@ -43,7 +43,7 @@ def resolve(name_or_path: str | None) -> Path:
         name_or_path = DEFAULT_SCENE
     if not str(name_or_path).strip():
         raise SceneError("(empty name)", ["no scene given: name a scene file or a shipped scene "
-                                          f"({', '.join(shipped_scenes())})"])
+                                          f"({', '.join(shipped_scenes())})"], unread=True)
     path = Path(name_or_path)
     if path.is_file():
         return path
@@ -54,13 +54,14 @@ def resolve(name_or_path: str | None) -> Path:
         raise SceneError(str(name_or_path), [
             "this is a folder, not a scene file; give the .toml file "
             + (f"inside it ({', '.join(inside[:5])}{', ...' if len(inside) > 5 else ''})" if inside
-               else "itself (this folder holds none)")])
+               else "itself (this folder holds none)")], unread=True)
     for candidate in (path.name, path.name + ".toml"):
         if candidate in shipped:
             return shipped[candidate]
     raise SceneError(
         str(name_or_path),
         [f"no such file, and no shipped scene of that name; shipped scenes: {', '.join(shipped)}"],
+        unread=True,
     )
 
 
@@ -72,21 +73,25 @@ def read_toml(path: Path) -> dict:
             head = fh.read(4096)
             if head.startswith((b"\xff\xfe", b"\xfe\xff")):
                 raise SceneError(str(path), ["saved as UTF-16; save the file as UTF-8 (e.g. iconv -f utf-16 -t utf-8 "
-                                             "OLD.toml > NEW.toml, or 'UTF-8' in the editor's save dialog)"])
+                                             "OLD.toml > NEW.toml, or 'UTF-8' in the editor's save dialog)"],
+                                 unread=True)
             if b"\0" in head:
                 raise SceneError(str(path), ["this is a binary file, not a scene (TOML text); give the scene's "
-                                             ".toml file"])
+                                             ".toml file"], unread=True)
             text = (head + fh.read()).decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
     except OSError as exc:
-        raise SceneError(str(path), [f"cannot read the file: {exc.strerror or exc}; check its permissions"]) from None
+        raise SceneError(str(path), [f"cannot read the file: {exc.strerror or exc}; check its permissions"],
+                         unread=True) from None
     except UnicodeDecodeError as exc:
         line = exc.object[:exc.start].count(b"\n") + 1
         raise SceneError(str(path), [f"not UTF-8 text (byte {exc.object[exc.start]:#04x} on line {line}); save the "
-                                     "file as UTF-8, e.g. iconv -f latin1 -t utf-8 OLD.toml > NEW.toml"]) from None
+                                     "file as UTF-8, e.g. iconv -f latin1 -t utf-8 OLD.toml > NEW.toml"],
+                         unread=True) from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(str(path), [f"not valid TOML: {exc}; see docs/scenes.md for the syntax"]) from None
+        raise SceneError(str(path), [f"not valid TOML: {exc}; see docs/scenes.md for the syntax"],
+                         unread=True) from None
 
 
 _INDEX = re.compile(r"^(\w+)\[(\d+)\]$")
