@@ -345,11 +345,12 @@ def test_a_closed_bed_between_mesh_plates_keeps_its_heat(tmp_path, solver_for):
 def test_a_tapered_packed_bed_between_leaning_plates_against_the_ergun_integral(tmp_path, solver_for):
     """The pressure drop of a packed bed in a wedge against the one-dimensional model of a tapered bed (Ergun's
     gradient at each layer's voidage and at the flow over the wedge's width there; the flow across the taper,
-    tan(a)/a - 1 = 1 % at 11.3 degrees, is left out): 1.39 times the integral at 4 mm cells, 1.19 at 2 mm
+    tan(a)/a - 1 = 1 % at 11.3 degrees, is left out): 1.17 times the integral at 4 mm cells, 1.11 at 2 mm
     (`benchmarks/mesh_scenes/tapered_ergun.py`, docs/validation.md). The gas grid is a staircase: where a new
-    column of cells opens beside a leaning plate, the gas enters it only from the side, an error of first
-    order in the cell size. The bands fail if the cut leaks gas past the bed or seals a column, or if the
-    error stops falling with the cell."""
+    column of cells opens beside a leaning plate, the gas enters it only from the side, an error that falls
+    with the cell size (with 0.5 mm grains 1.15, 1.09, 1.05 at 4, 2, 1.5 mm). The bands fail if the cut leaks
+    gas past the bed or seals a column, if the cells beside the plates read the grains of the sealed cells
+    (1.39 and 1.19, as before `GasCut.wet` counted their open part), or if the error stops falling."""
     ratios = []
     for cell in (0.004, 0.002):
         raw, area, pos = wedge_bed(tmp_path, cell=cell)
@@ -357,5 +358,5 @@ def test_a_tapered_packed_bed_between_leaning_plates_against_the_ergun_integral(
         drop, integral = tapered_drop(solver, area, pos)
         ratios.append(drop / integral)
         assert solver.gas.divergence * cell / 0.3 < 1e-6
-    assert 1.25 < ratios[0] < 1.5 and 1.1 < ratios[1] < 1.3
-    assert ratios[1] - 1 < 0.6 * (ratios[0] - 1), "about first order in the cell size"
+    assert 1.1 < ratios[0] < 1.25 and 1.04 < ratios[1] < 1.16
+    assert ratios[1] < ratios[0] - 0.03, "falling with the cell size"

@@ -41,7 +41,12 @@ class GasCut:
     unreachable: np.ndarray  # bool [cells]: no open path to the outlet
     open_fraction: np.ndarray  # [cells] share of the cell the gas fills (1 where uncut)
     sub: int  # sub-cells per cell and axis
-    wet: np.ndarray | None = None  # bool [cells x sub per axis]: sub-cells joined to the outlet by uncut links
+    wet: np.ndarray  # bool [cells x sub per axis]: sub-cells joined to the outlet by uncut links
+
+    def open_sub_cells(self, solid: np.ndarray) -> np.ndarray:
+        """bool [cells x sub per axis]: the sub-cells open past the meshes, those the gas reaches (`wet`) and all
+        of a cell `solid` for another reason than the meshes (a tube's: its own test is analytic)."""
+        return self.wet | _fine(solid.astype(bool) & ~self.unreachable.astype(bool), self.sub)
 
     def report_lines(self) -> list[str]:
         cut = (self.open_fraction < 1.0) & ~self.unreachable
@@ -116,7 +121,7 @@ def _links(gg: GasGrid, c: int, t: np.ndarray, clip: np.ndarray, spacing: float,
     return np.clip(np.floor(x).astype(np.int64) + 1, 0, n), inside
 
 
-def _cut_links(gg: GasGrid, tri: np.ndarray, s: int, clip: np.ndarray | None) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def cut_links(gg: GasGrid, tri: np.ndarray, s: int, clip: np.ndarray | None) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Per axis c: the sub-cell links a mesh cuts (bool, shape of the sub-grid with n_c s + 1
     links along an open c, n_c s periodic, numbered as `_links` does) and the cell-centre-to-centre
     rays it cuts (bool, numbered as the faces are, `gas_grid.GasGrid.face_shape`, sub-cells across)."""
@@ -159,7 +164,7 @@ def components(n: int, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
             label = nxt
 
 
-def _reached(shape, open_links: list[np.ndarray], periodic, seeds: np.ndarray, skip: np.ndarray) -> np.ndarray:
+def reached(shape, open_links: list[np.ndarray], periodic, seeds: np.ndarray, skip: np.ndarray) -> np.ndarray:
     """Cells of a grid `shape` joined to a seed cell through open links (per axis c, bool over the
     links between consecutive cells: shape[c] - 1 of them, shape[c] on a periodic axis), never
     through a `skip` cell."""
@@ -178,7 +183,7 @@ def _reached(shape, open_links: list[np.ndarray], periodic, seeds: np.ndarray, s
     return hit[label].reshape(shape)
 
 
-def _interior(links: np.ndarray, c: int, periodic: bool) -> np.ndarray:
+def interior_links(links: np.ndarray, c: int, periodic: bool) -> np.ndarray:
     """The links between cells from an array that also holds the two boundary links (open axis)."""
     return links if periodic else np.take(links, range(1, links.shape[c] - 1), axis=c)
 
@@ -191,7 +196,7 @@ def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[n
     cells already solid (tubes) and `kinds` their face kinds (`gas_geometry.face_kinds`); `clip`
     [T, 3] as `ray_crossings` takes it (None: every mesh wraps across periodic boundaries)."""
     s = subdivision(gg)
-    sub_cut, face_cut = _cut_links(gg, np.asarray(triangles, float), s, clip)
+    sub_cut, face_cut = cut_links(gg, np.asarray(triangles, float), s, clip)
     blocked = []
     for c in range(3):
         split = []  # the face array with each cross axis split into (cells, sub-cells)
@@ -200,23 +205,23 @@ def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[n
         share = face_cut[c].reshape(split).mean(axis=_sub_axes(c))
         blocked.append((share >= BLOCKED_SHARE) & (kinds[c] != CLOSED))
     kinds = [np.where(bl, CLOSED, kd) for bl, kd in zip(blocked, kinds)]
-    # faces as links between consecutive cells (`_reached`): on a periodic axis link j is face j + 1
-    open_faces = [np.roll(kinds[c] != CLOSED, -1, axis=c) if gg.periodic[c] else _interior(kinds[c] != CLOSED, c, False)
-                  for c in range(3)]
+    # faces as links between consecutive cells (`reached`): on a periodic axis link j is face j + 1
+    open_faces = [np.roll(kinds[c] != CLOSED, -1, axis=c) if gg.periodic[c]
+                  else interior_links(kinds[c] != CLOSED, c, False) for c in range(3)]
     fine_shape = tuple(n * s for n in gg.cells)
-    fine_open = [_interior(~sub_cut[c], c, gg.periodic[c]) for c in range(3)]
+    fine_open = [interior_links(~sub_cut[c], c, gg.periodic[c]) for c in range(3)]
     fine_seeds = np.zeros(fine_shape, bool)
     fine_seeds[:, :, -1] = np.repeat(np.repeat(kinds[2][:, :, -1] == OUTLET, s, 0), s, 1) & ~sub_cut[2][:, :, -1]
     # the sub-cells the gas reaches through links no mesh cuts, whatever their cell: a cell with less than
     # half of them is mostly inside a body, even where the staircase of half-blocked faces leaves it a way out
-    wet = _reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(solid.astype(bool), s))
+    wet = reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(solid.astype(bool), s))
     dry = _coarse(wet, gg.cells, s).mean(axis=(1, 3, 5)) < BLOCKED_SHARE
     seeds = np.zeros(gg.cells, bool)
     seeds[:, :, -1] = kinds[2][:, :, -1] == OUTLET
-    reach = _reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool) | dry)
+    reach = reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool) | dry)
     unreachable = ~reach & ~solid.astype(bool)
     # sub-cells: the open fraction of each cell
-    fine_reach = _reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(~reach, s))
+    fine_reach = reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(~reach, s))
     frac = _coarse(fine_reach, gg.cells, s).mean(axis=(1, 3, 5))
     frac = np.where(reach, np.clip(frac, MIN_OPEN, 1.0), 1.0)
     return GasCut(blocked=blocked, unreachable=unreachable, open_fraction=frac, sub=s, wet=wet)

@@ -17,8 +17,10 @@ cell's own open share f_c V is not that volume beside a wall:
 
 Away from walls V_c^open = V, which the weights' partition of unity gives exactly; there the integral is
 not evaluated. Near walls it is a midpoint sum over points in each cell: 12 a side within reach of a tube
-(its round edge sampled at a twelfth of a cell), 4 elsewhere, where a mesh's open share (`tidem.gas_mesh`,
-ray-cast per cell) is spread evenly over its cell.
+(its round edge sampled at a twelfth of a cell), 4 elsewhere. A point is open outside the tubes and in a
+sub-cell the gas reaches past the meshes (`tidem.gas_mesh.GasCut.wet`, the sub-cells' centres being the
+points at 4 a side). That counts the part of a mesh's sealed cells outside it, as the ring of a tube's solid
+cells outside the tube is counted: grains lie there, and their weights hand them to the cells beside.
 """
 
 from __future__ import annotations
@@ -42,9 +44,10 @@ def open_volumes(gg: GasGrid, solid: np.ndarray, kinds: list[np.ndarray], tubes:
     1 at the others; None without tubes and meshes (the plain weights then, and the whole volume)."""
     if not tubes and cut is None:
         return None
-    mesh = None if cut is None else np.where(cut.unreachable.astype(bool), 0.0, cut.open_fraction)
     solid = solid.astype(bool)
-    near = grow(gg, solid | (cut_share(gg, tubes, mesh) < 1.0), 1)  # gas cells with a wall within one cell
+    share = None if cut is None else np.where(cut.unreachable.astype(bool), 0.0, cut.open_fraction)
+    near = grow(gg, solid | (cut_share(gg, tubes, share) < 1.0), 1)  # gas cells with a wall within one cell
+    mesh = None if cut is None else cut.open_sub_cells(solid)
     out = {"cells": lattice_open_volume(gg, gg, solid, near, tubes, mesh)}
     for c in range(3):
         lattice = face_lattice(gg, c)
@@ -141,13 +144,17 @@ def cell_points(gg: GasGrid, cells: np.ndarray, sub: int = SUB_TUBE) -> np.ndarr
 
 
 def open_at(gg: GasGrid, tubes: list[dict], mesh: np.ndarray | None, x: np.ndarray) -> np.ndarray:
-    """The open share at points x [N, 3]: 0 inside a tube, else `mesh` at their gas cells (1 without)."""
+    """Whether points x [N, 3] are open (1.0) or not (0.0): outside every tube and, with meshes, in a sub-cell
+    of `mesh` (bool, s sub-cells per cell and axis: those the gas reaches) that is True."""
     open_ = np.ones(len(x))
     for t in tubes:
         d = (x - np.asarray(t["c"])) * np.asarray(t["mask"])
         open_[np.einsum("ij,ij->i", d, d) < t["r"] ** 2] = 0.0
     if mesh is not None:
-        open_ *= mesh[tuple(gas_cell(gg, x).T)]
+        fine = np.asarray(mesh.shape)
+        idx = np.floor((x - np.asarray(gg.lo)) / np.asarray(gg.h) * (fine // np.asarray(gg.cells))).astype(int)
+        idx = np.where(gg.periodic, idx % fine, np.clip(idx, 0, fine - 1))
+        open_ *= mesh[tuple(idx.T)]
     return open_
 
 
