@@ -5,7 +5,8 @@ Sizes are drawn from the group's distribution with its seed (cut-offs by redrawi
 clipping, so no spike at the bounds). A filled region is a simple cubic lattice of spacing
 1.02 d_max (no initial overlap), its sites jittered by up to 1 % of the spacing, filled bottom-up; sites
 that would overlap a tube, a wall or a mesh wall are skipped, and so are those inside a body drawn as a
-mesh (`inside_bodies`: a tube or block the region surrounds). Given positions that overlap a mesh
+mesh (`inside_bodies`: a tube or block the region surrounds), and with `skip_pockets` those a grain
+could not reach from the domain's top (`tidem.fill_pockets`). Given positions that overlap a mesh
 wall by more than numerics.max_overlap are refused with a message naming the particle.
 """
 
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tidem.fill_pockets import joined_to_top
 from tidem.mesh_geometry import inside_mesh, point_mesh_distance
 from tidem.overlaps import min_image
 from tidem.scene.sizes import largest_parcel, parcel_count
@@ -180,13 +182,16 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
                     continue
                 sites = sites[inside]
             sites = sites[~inside_bodies(sites, mesh_geo, g.inside_mesh, _box_volume(g.region.min, g.region.max))]
+            if g.skip_pockets and meshes and len(sites):
+                sites = sites[joined_to_top(dom.min, lengths, periodic, spacing, meshes, sites)]
             if count is None:
                 count = len(sites)
             if len(sites) == 0 or len(sites) < count:
                 asked = f"{count}" if g.coarse_grain == 1.0 else f"{count} parcels ({g.count} grains / k^3)"
                 errors.append(
                     f"{key}: the region holds at most {len(sites)} particles of diameter {spacing / 1.02:g} m clear of "
-                    f"walls, tubes and meshes, but {asked} were asked for; enlarge 'region' or lower 'count'"
+                    f"walls, tubes and meshes{' (pockets skipped)' if g.skip_pockets else ''}, but {asked} were asked "
+                    "for; enlarge 'region' or lower 'count'"
                 )
                 continue
         try:

@@ -119,6 +119,7 @@ class ParticleGroup(Strict):
     seed: StrictInt = Field(default=0, ge=0)
     coarse_grain: Number = Field(default=1.0, ge=1.0, le=10.0)
     inside_mesh: StrictInt | None = Field(default=None, ge=0)
+    skip_pockets: StrictBool = False
 
     @model_validator(mode="before")
     @classmethod
@@ -141,6 +142,8 @@ class ParticleGroup(Strict):
             raise ValueError(f"count ({self.count}) differs from the number of positions ({len(self.positions)})")
         if self.inside_mesh is not None and self.region is None:
             raise ValueError("'inside_mesh' limits a filled 'region' to the inside of a mesh; give 'region' too")
+        if self.skip_pockets and self.region is None:
+            raise ValueError("'skip_pockets' leaves the pockets of a filled 'region' empty; give 'region' too")
         if self.pour is not None and self.count is None:
             raise ValueError("a poured group needs 'count' (the number of particles to pour)")
         if self.velocities is not None:
