@@ -21,6 +21,8 @@ from tidem.mesh_geometry import inside_mesh, point_mesh_distance
 from tidem.overlaps import min_image
 from tidem.scene.sizes import largest_parcel, parcel_count
 
+POCKETS = (" and out of the pockets a grain could not reach from the domain's top (skip_pockets; a closed "
+           "vessel, such as a drum, is all pocket: fill it with 'inside_mesh')")
 MAX_MESH_MESSAGES = 6  # given positions inside a mesh reported one by one, per group
 
 
@@ -190,8 +192,8 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
                 asked = f"{count}" if g.coarse_grain == 1.0 else f"{count} parcels ({g.count} grains / k^3)"
                 errors.append(
                     f"{key}: the region holds at most {len(sites)} particles of diameter {spacing / 1.02:g} m clear of "
-                    f"walls, tubes and meshes{' (pockets skipped)' if g.skip_pockets else ''}, but {asked} were asked "
-                    "for; enlarge 'region' or lower 'count'"
+                    f"walls, tubes and meshes{POCKETS if g.skip_pockets else ''}, but {asked} were asked for; enlarge "
+                    "'region' or lower 'count'"
                 )
                 continue
         try:

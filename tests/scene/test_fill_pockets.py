@@ -23,18 +23,25 @@ def save(path, quads):
     pv.PolyData.from_regular_faces(tri.reshape(-1, 3), np.arange(len(tri) * 3).reshape(-1, 3)).save(str(path))
 
 
-def fill(tmp_path, quads, skip: bool, top: float = 0.07):
-    """The sites of a 1 mm fill of the slab below `top` among the plates `quads`."""
+def place(tmp_path, quads, skip: bool, top: float = 0.07, right: float = W, bottom: float = 0.0):
+    """(placed, errors) of a 1 mm fill of the slab from `bottom` to `top`, left of `right`, among the plates
+    `quads`."""
     save(tmp_path / "plates.stl", quads)
     group = {"name": "bed", "material": "sand", "diameter": 0.001, "skip_pockets": skip,
-             "region": {"min": [0.0, 0.0, 0.0], "max": [W, DEPTH, top]}}
+             "region": {"min": [0.0, 0.0, bottom], "max": [right, DEPTH, top]}}
     raw = {"domain": {"min": [0.0, 0.0, 0.0], "max": [W, DEPTH, 0.25], "periodic": ["y"]},
            "materials": {"sand": {"density": 2600.0, "youngs_modulus": 1e7}},
            "particles": [group], "meshes": [{"file": "plates.stl"}]}
     scene = validate(raw).scene
     walls, errs = load_mesh_walls(scene, tmp_path / "scene.toml", "sand")
-    placed, errors = place_groups(scene, [], [], [W, DEPTH, 0.25], (False, True, False), walls)
-    assert errs == [] and errors == [], errors
+    assert errs == []
+    return place_groups(scene, [], [], [W, DEPTH, 0.25], (False, True, False), walls)
+
+
+def fill(tmp_path, quads, skip: bool):
+    """The sites of `place`'s fill below 70 mm."""
+    placed, errors = place(tmp_path, quads, skip)
+    assert errors == [], errors
     return placed.x0
 
 
@@ -65,6 +72,9 @@ def test_a_pocket_under_a_lid_is_skipped_and_one_open_above_is_not(tmp_path):
     sealed = [shelf[0], ((0.04, 0.02), (0.04, 0.05)), ((0.0, 0.05), (0.04, 0.05))]
     assert on_shelf(fill(tmp_path, sealed, True)).sum() == 0
     assert on_shelf(fill(tmp_path, sealed, False)).sum() > 500
+    placed, errors = place(tmp_path, sealed, True, top=0.05, right=0.04, bottom=0.02)  # all pocket
+    assert placed is None and errors[0].startswith("particles[0]: the region holds at most 0 particles")
+    assert "fill it with 'inside_mesh'" in errors[0]
 
 
 def test_skip_pockets_needs_a_region():
