@@ -192,6 +192,8 @@ def check(
     lines = [
         f"scene: {model.name} ({loaded.source})",
         f"particles: {int(model.active0.sum())} at start, {model.capacity} in all, total mass {mass:.4g} kg",
+        *[f"particles[{g}]: {n} lattice sites left empty in pockets a grain could not reach from the "
+          "domain's top (skip_pockets)" for g, n in model.pocket_sites.items()],
         f"{'parcel diameter' if f.coarse_grain else 'diameter'}: {2 * model.radius.min():.4g} .. "
         f"{2 * model.radius.max():.4g} m" + (f" (grains {2 * float((model.radius / model.coarse_grain).min()):.4g} .. "
                                                f"{2 * float((model.radius / model.coarse_grain).max()):.4g} m)"

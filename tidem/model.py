@@ -75,6 +75,7 @@ class Model:
     meshes: list = field(default_factory=list)  # [[meshes]] as tidem.mesh_walls.MeshWall
     mesh_table: MeshTable | None = None  # their triangles and bins as the kernels hold them
     gas_cut: GasCut | None = None  # with [gas]: what the meshes do to the gas grid (tidem.gas_mesh)
+    pocket_sites: dict[int, int] = field(default_factory=dict)  # group -> lattice sites skip_pockets left empty
 
     def uniform_particles(self) -> tuple[float, float] | None:
         """(radius, mass) where all particles have the same and keep it (no reactions), else None: the
@@ -229,7 +230,7 @@ def build_model(loaded: LoadedScene, smoke: bool = False, t_end: float | None = 
         angle_bins=scene.heat.angle_bins if scene.heat is not None and any(map(is_heated, tubes)) else 0,
         reaction_index=rx, reaction_constants=rconst,
         averaging=averaging_layout(scene),
-        coarse_grain=coarse_grain, meshes=meshes, mesh_table=table, gas_cut=cut,
+        coarse_grain=coarse_grain, meshes=meshes, mesh_table=table, gas_cut=cut, pocket_sites=placed.pocket_sites,
     )
     too_big = memory_refusal(model)
     if too_big:

@@ -12,7 +12,7 @@ wall by more than numerics.max_overlap are refused with a message naming the par
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -112,6 +112,7 @@ class Placed:
     active0: np.ndarray  # False for particles still to be poured
     temperature0: np.ndarray | None  # None without [heat]
     pours: list[dict]  # one per poured group, for `tidem.pour.Pourer`
+    pocket_sites: dict[int, int] = field(default_factory=dict)  # group -> lattice sites skip_pockets left empty
 
 
 def mesh_position_overlaps(scene, key: str, pos: np.ndarray, radius: np.ndarray, meshes) -> list[str]:
@@ -163,6 +164,7 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
     mat_names = list(scene.materials)
     radius, material, group, x0, v0, active0, pours = [], [], [], [], [], [], []
     fixed, temp0 = [], []
+    pocket_sites: dict[int, int] = {}
     errors: list[str] = []
     offset = 0
     for gi, g in enumerate(scene.particles):
@@ -185,7 +187,9 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
                 sites = sites[inside]
             sites = sites[~inside_bodies(sites, mesh_geo, g.inside_mesh, _box_volume(g.region.min, g.region.max))]
             if g.skip_pockets and meshes and len(sites):
-                sites = sites[joined_to_top(dom.min, lengths, periodic, spacing, meshes, sites)]
+                joined = joined_to_top(dom.min, lengths, periodic, spacing, meshes, sites)
+                pocket_sites[gi] = int((~joined).sum())
+                sites = sites[joined]
             if count is None:
                 count = len(sites)
             if len(sites) == 0 or len(sites) < count:
@@ -244,7 +248,7 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
     return Placed(radius=np.concatenate(radius), material=np.concatenate(material), group=np.concatenate(group),
                   fixed=np.concatenate(fixed), x0=np.concatenate(x0), v0=np.concatenate(v0),
                   active0=np.concatenate(active0), temperature0=np.concatenate(temp0) if scene.heat is not None else None,
-                  pours=pours), []
+                  pours=pours, pocket_sites=pocket_sites), []
 
 
 def spatial_key(x: np.ndarray, lo, cell: float) -> np.ndarray:

@@ -48,15 +48,18 @@ def fill(tmp_path, quads, skip: bool):
 def test_a_wedge_is_filled_between_its_plates_and_its_pockets_stay_empty(tmp_path):
     """The plates lean from the slot's edges to the side walls and close the two pockets behind them, even
     where the region's top (70 mm) cuts across them: with `skip_pockets` every site lies between the plates,
-    and every site between them is kept (the fill without it, less those behind the plates)."""
+    and every site between them is kept (the fill without it, less those behind the plates, whose number is
+    reported)."""
     x0 = (W - SLOT) / 2
     quads = [((x0, 0.0), (0.0, TOP)), ((W - x0, 0.0), (W, TOP))]
-    kept, every = fill(tmp_path, quads, True), fill(tmp_path, quads, False)
+    placed, _ = place(tmp_path, quads, True)
+    kept, every = placed.x0, fill(tmp_path, quads, False)
     def between(x):
         return np.abs(x[:, 0] - W / 2) < SLOT / 2 + x0 * x[:, 2] / TOP
 
     assert (~between(every)).sum() > 0.5 * len(every)  # the pockets hold more than half of the plain fill
     assert between(kept).all() and len(kept) == between(every).sum()  # (the sites' jitter differs)
+    assert placed.pocket_sites == {0: len(every) - len(kept)}  # reported by `tidem check`
 
 
 def test_a_pocket_under_a_lid_is_skipped_and_one_open_above_is_not(tmp_path):
