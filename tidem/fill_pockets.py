@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas_geometry import spans_period
-from tidem.gas_mesh import cut_links, interior_links, reached
+from tidem.gas_mesh import cell_index, cut_links, interior_links, reached
 from tidem.kernels.gas_grid import GasGrid
 
 MAX_VOXELS = 4_000_000  # as the gas cut's sub-cells (`gas_mesh.MAX_SUBCELLS`)
@@ -36,6 +36,4 @@ def joined_to_top(lo, lengths, periodic, spacing: float, meshes, sites: np.ndarr
     seeds = np.zeros(cells, bool)
     seeds[:, :, -1] = True
     joined = reached(cells, links, grid.periodic, seeds, np.zeros(cells, bool))
-    idx = np.floor((sites - np.asarray(grid.lo)) / np.asarray(grid.h)).astype(np.int64)
-    idx = np.where(grid.periodic, idx % cells, np.clip(idx, 0, np.asarray(cells) - 1))
-    return joined[tuple(idx.T)]
+    return joined[tuple(cell_index(grid, sites).T)]

@@ -227,6 +227,19 @@ def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[n
     return GasCut(blocked=blocked, unreachable=unreachable, open_fraction=frac, sub=s, wet=wet)
 
 
+def cell_index(gg: GasGrid, x: np.ndarray) -> np.ndarray:
+    """[N, 3] index of the cell of `gg` holding each point x [N, 3]: wrapped on periodic axes, clamped into the
+    grid on the others."""
+    n = np.asarray(gg.cells)
+    idx = np.floor((x - np.asarray(gg.lo)) / np.asarray(gg.h)).astype(np.int64)
+    return np.where(gg.periodic, idx % n, np.clip(idx, 0, n - 1))
+
+
+def sub_grid(gg: GasGrid, s: int) -> GasGrid:
+    """The grid of `gg`'s sub-cells, s per cell and axis."""
+    return GasGrid(gg.lo, tuple(n * s for n in gg.cells), tuple(h / s for h in gg.h), gg.periodic)
+
+
 def _fine(cells: np.ndarray, s: int) -> np.ndarray:
     """A per-cell array repeated over each cell's s^3 sub-cells."""
     return np.repeat(np.repeat(np.repeat(cells, s, 0), s, 1), s, 2)

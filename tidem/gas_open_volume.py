@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas_geometry import shifted
-from tidem.gas_mesh import MIN_OPEN, GasCut
+from tidem.gas_mesh import MIN_OPEN, GasCut, cell_index, sub_grid
 from tidem.kernels.gas_grid import CLOSED, GasGrid, layer_grid
 
 SUB_TUBE = 12  # points per cell along its longest side within reach of a tube (its round edge sampled)
@@ -151,10 +151,7 @@ def open_at(gg: GasGrid, tubes: list[dict], mesh: np.ndarray | None, x: np.ndarr
         d = (x - np.asarray(t["c"])) * np.asarray(t["mask"])
         open_[np.einsum("ij,ij->i", d, d) < t["r"] ** 2] = 0.0
     if mesh is not None:
-        fine = np.asarray(mesh.shape)
-        idx = np.floor((x - np.asarray(gg.lo)) / np.asarray(gg.h) * (fine // np.asarray(gg.cells))).astype(int)
-        idx = np.where(gg.periodic, idx % fine, np.clip(idx, 0, fine - 1))
-        open_ *= mesh[tuple(idx.T)]
+        open_ *= mesh[tuple(cell_index(sub_grid(gg, mesh.shape[0] // gg.cells[0]), x).T)]
     return open_
 
 
