@@ -190,14 +190,16 @@ def place_groups(scene, planes: list[dict], tubes: list[dict], lengths, periodic
                 joined = joined_to_top(dom.min, lengths, periodic, spacing, meshes, sites)
                 pocket_sites[gi] = int((~joined).sum())
                 sites = sites[joined]
-            if count is None:
+            fill_all = count is None
+            if fill_all:
                 count = len(sites)
             if len(sites) == 0 or len(sites) < count:
                 asked = f"{count}" if g.coarse_grain == 1.0 else f"{count} parcels ({g.count} grains / k^3)"
                 errors.append(
                     f"{key}: the region holds at most {len(sites)} particles of diameter {spacing / 1.02:g} m clear of "
-                    f"walls, tubes and meshes{POCKETS if g.skip_pockets else ''}, but {asked} were asked for; enlarge "
-                    "'region' or lower 'count'"
+                    f"walls, tubes and meshes{POCKETS if g.skip_pockets else ''}"
+                    + ("; enlarge 'region'" if fill_all else f", but {asked} were asked for; enlarge 'region' or "
+                                                             "lower 'count'")
                 )
                 continue
         try:
