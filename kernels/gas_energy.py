@@ -54,6 +54,7 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
     area = ti.Vector([gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]])
     U, K = G.u, G.kind
     unit, cell_index, face_index, face_eps = index.unit, index.cell_index, index.face_index, index.face_eps
+    aperture, part, cut_faces = index.aperture, index.part, index.cut_faces
 
     pr3 = prandtl ** (1.0 / 3.0)
     cb_denominator = (1.0 + (0.4 / prandtl) ** (2.0 / 3.0)) ** 0.25
@@ -106,6 +107,9 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
         slope = 0.0
         if d1 * d2 > 0.0:
             slope = 2.0 * d1 * d2 / (d1 + d2)  # phi(r) d1 of van Leer
+        if ti.static(cut_faces):
+            if part(cell_index(up)) < 1.0 or part(cell_index(down)) < 1.0:
+                slope = 0.0  # a face of a cut cell: first order (`gas_checks.courant`)
         return f_up + 0.5 * slope
 
     @ti.func
@@ -124,7 +128,7 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
                     f = face_index(I + e, c)
                 kind = K[c][f]
                 if kind != CLOSED:
-                    flux = face_eps(f, c) * U[c][f] * area[c]
+                    flux = aperture(f, c) * face_eps(f, c) * U[c][f] * area[c]
                     if ti.static(side == 0):
                         flux = -flux
                     f_face = F[I]
@@ -157,7 +161,7 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
                     f = face_index(I + e, c)
                     nb = I + e
                 if K[c][f] == INTERIOR:
-                    out += face_eps(f, c) * area[c] * (F[cell_index(nb)] - F[I]) / h[c]
+                    out += aperture(f, c) * face_eps(f, c) * area[c] * (F[cell_index(nb)] - F[I]) / h[c]
         return out
 
     @ti.kernel
@@ -189,8 +193,9 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
                     if G.wall_A[I] > 0.0:
                         hw = wall_conductance(I)
                         hw_tw = hw * G.wall_T[I]
-                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * vol - dt * net) + dt * (G.HT[I] + hw_tw) + extra) \
-                    / (rho_c * G.eps[I] * vol + dt * (G.H[I] + hw))
+                v = vol * part(I)
+                G.T_new[I] = (rho_c * (G.eps_old[I] * G.T[I] * v - dt * net) + dt * (G.HT[I] + hw_tw) + extra) \
+                    / (rho_c * G.eps[I] * v + dt * (G.H[I] + hw))
         if ti.static(serial):
             ti.loop_config(serialize=True)
         for I in ti.grouped(ti.ndrange(*cells)):
@@ -204,7 +209,7 @@ def make_energy_kernels(gg, G, index, rho: float, mu: float, heat: bool, rho_c: 
                     G.wall_rate[G.wall_k[I]] += flow
                     G.wall_energy[G.wall_k[I]] += dt * flow
 
-    kernels = dict(upwind=upwind, interior_diffusion=interior_diffusion)
+    kernels = dict(upwind=upwind, interior_diffusion=interior_diffusion, part=part)
     if heat:
         kernels["energy"] = energy
     return kernels

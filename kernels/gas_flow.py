@@ -21,6 +21,12 @@ Boundaries: inlet faces at the bottom carry a set superficial velocity (eps_f u_
 the top is a pressure outlet (p = 0 on the face); other box sides and faces of solid cells
 (cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
 periodic axes wrap.
+Cut faces (meshes in the gas, `tidem.gas_apertures`): a face open over the share a_f of its area
+carries the flux a_f eps_f u_f, u_f the gas velocity in its open part, and a cell whose gas part
+is the share f of it holds f V of gas, so that the pressure equation reads
+    sum_f a_f eps_f A_f (p_nb - p) / h^2 = f d(eps)/dt + sum_f +- a_f eps_f u*_f / h,
+symmetric still (each face's coefficient a_f eps_f A_f / h^2 shared by its two cells); the gas
+energy and species take the same fluxes and volumes. Without meshes a_f = f = 1.
 Gas energy: `kernels/gas_energy.py`.
 """
 
@@ -29,6 +35,7 @@ from types import SimpleNamespace
 import taichi as ti
 
 from .gas_band import make_band_solve
+from .gas_checks import make_check_kernels
 from .gas_energy import make_energy_kernels
 from .gas_grid import CLOSED, INLET, OUTLET, make_cic, serial_loops
 from .ordered import in_order
@@ -58,7 +65,7 @@ def cg_batch() -> int:
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
                       tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
                       conduction: bool = False, wall_grain: float = 0.0,
-                      wall_umf: float = 0.0, band: int = 0, open_faces: bool = False):
+                      wall_umf: float = 0.0, band: int = 0, open_faces: bool = False, cut_faces: bool = False):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas_fields`); `tube_walls`
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy;
     with `wall_grain` > 0, the grains' diameter, the packed-bed term in the particle-filled share, its
@@ -66,7 +73,9 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
     `conduction` Fourier conduction through the gas; `band` > 0 (`gas_band.band_width`) adds the direct
     pressure solve band_solve (fields band, band_y). With `open_faces` (tubes or meshes in the gas) a face's drag
-    B_f, Bv_f acts over its open volume, G.open_face[c] times the face's volume (`tidem.gas_open_volume`)."""
+    B_f, Bv_f acts over its open volume, G.open_face[c] times the face's volume (`tidem.gas_open_volume`). With
+    `cut_faces` (meshes in the gas) each face carries its aperture G.aperture[c] and each cell its gas part's
+    share G.part of its volume (`tidem.gas_apertures`): the fluxes a_f S_f (eps u)_f and the volume f V."""
     cic, corner, weight, corners = make_cic(gg)
     n = gg.cells
     small = serial_solve(n[0] * n[1] * n[2])
@@ -115,6 +124,22 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
         return 0.5 * (G.eps[cell_index(I - unit(c))] + G.eps[cell_index(I)])
 
     @ti.func
+    def aperture(I, c: ti.template()):
+        """The open share of face I normal to c (1 without meshes)."""
+        a = 1.0
+        if ti.static(cut_faces):
+            a = G.aperture[c][I]
+        return a
+
+    @ti.func
+    def part(I):
+        """The share of cell I its gas fills (1 without meshes)."""
+        f = 1.0
+        if ti.static(cut_faces):
+            f = G.part[I]
+        return f
+
+    @ti.func
     def sample(F: ti.template(), c: ti.template(), x):
         base, frac = cic(x, c)
         out = 0.0
@@ -154,6 +179,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                     US[c][I] = (rho * ef * (u_adv + dt * (nu * lap + g[c])) + dt * G.Bv[c][I] * inv_vol) / denom
                     A[c][I] = dt * ef / denom
                     coef = ef * A[c][I] / (h[c] * h[c])
+                    if ti.static(cut_faces):
+                        coef *= G.aperture[c][I]
                     if kind == OUTLET:
                         coef *= 2.0
                     C[c][I] = coef
@@ -193,11 +220,12 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
             dg = 1.0
             if G.solid[I] == 0:
                 dg = 0.0
-                div = (G.eps[I] - G.eps_old[I]) / dt
+                div = part(I) * (G.eps[I] - G.eps_old[I]) / dt
                 for c in ti.static(range(3)):
                     e = unit(c)
                     fp = face_index(I + e, c)
-                    div += (face_eps(fp, c) * US[c][fp] - face_eps(I, c) * US[c][I]) / h[c]
+                    div += (aperture(fp, c) * face_eps(fp, c) * US[c][fp] - aperture(I, c) * face_eps(I, c) * US[c][I]) \
+                        / h[c]
                     dg += C[c][I] + C[c][fp]
                 b = -div
             G.rhs[I] = b
@@ -355,35 +383,11 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                 GP[c][I] = grad
                 U[c][I] = US[c][I] - A[c][I] * grad
 
-    @ti.kernel
-    def divergence(dt: ti.f64) -> ti.f64:
-        """max over fluid cells of |d eps/dt + div(eps u)| [1/s] after the correction."""
-        worst = 0.0
-        if ti.static(serial):
-            ti.loop_config(serialize=True)
-        for I in ti.grouped(ti.ndrange(*cells)):
-            if G.solid[I] == 0:
-                div = (G.eps[I] - G.eps_old[I]) / dt
-                for c in ti.static(range(3)):
-                    fp = face_index(I + unit(c), c)
-                    div += (face_eps(fp, c) * U[c][fp] - face_eps(I, c) * U[c][I]) / h[c]
-                ti.atomic_max(worst, ti.abs(div))
-        return worst
-
-    @ti.kernel
-    def courant(dt: ti.f64) -> ti.f64:
-        """Largest face Courant number |u| dt / h."""
-        worst = 0.0
-        for c in ti.static(range(3)):
-            if ti.static(serial):
-                ti.loop_config(serialize=True)
-            for I in ti.grouped(ti.ndrange(*faces[c])):
-                ti.atomic_max(worst, ti.abs(U[c][I]) * dt / h[c])
-        return worst
-
     kernels = dict(predict=predict, assemble=assemble, cg_start=cg_start, cg_iterate=cg_iterate, cg_serial=cg_serial,
-                   correct=correct, divergence=divergence, courant=courant)
-    index = SimpleNamespace(unit=unit, cell_index=cell_index, face_index=face_index, face_eps=face_eps, apply=apply)
+                   correct=correct)
+    index = SimpleNamespace(unit=unit, cell_index=cell_index, face_index=face_index, face_eps=face_eps, apply=apply,
+                            aperture=aperture, part=part, cut_faces=cut_faces)
+    kernels.update(make_check_kernels(gg, G, index, cut_faces))
     if band:
         kernels["band_solve"] = make_band_solve(gg, G, index, band)
     kernels.update(make_energy_kernels(gg, G, index, rho, mu, heat, rho_c, tube_walls, k_gas, prandtl, sources,

@@ -22,7 +22,7 @@ def make_species_kernel(gg, G, flow: dict, rho: float, diffusivity: float):
     vol = gg.volume
     serial = serial_loops(gg)  # the grid's loops in one thread (small grids on the CPU)
     cells = tuple(gg.cells)
-    upwind, interior_diffusion = flow["upwind"], flow["interior_diffusion"]
+    upwind, interior_diffusion, part = flow["upwind"], flow["interior_diffusion"], flow["part"]
 
     @ti.kernel
     def species(dt: ti.f64, y_in: ti.f64):
@@ -34,8 +34,9 @@ def make_species_kernel(gg, G, flow: dict, rho: float, diffusivity: float):
             if G.solid[I] == 0:
                 net, boundary = upwind(G.Y, I, y_in, False)
                 diff = interior_diffusion(G.Y, I)
-                y = (G.eps_old[I] * G.Y[I] * vol - dt * net + dt * diffusivity * diff - G.o2_sink[I] / rho) \
-                    / (G.eps[I] * vol)
+                v = vol * part(I)
+                y = (G.eps_old[I] * G.Y[I] * v - dt * net + dt * diffusivity * diff - G.o2_sink[I] / rho) \
+                    / (G.eps[I] * v)
                 G.o2_sink[I] = 0.0
                 G.bsum[1] += -dt * rho * boundary
                 if y < 0.0:

@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas_geometry import spans_period
-from tidem.gas_mesh import cell_index, cut_links, interior_links, reached
+from tidem.gas_mesh import cell_index, cut_links
+from tidem.grid_graph import interior_links, reached
 from tidem.kernels.gas_grid import GasGrid
 
 MAX_VOXELS = 4_000_000  # as the gas cut's sub-cells (`gas_mesh.MAX_SUBCELLS`)
@@ -31,7 +32,7 @@ def joined_to_top(lo, lengths, periodic, spacing: float, meshes, sites: np.ndarr
     cells = tuple(int(n) for n in np.maximum(np.ceil(lengths / h - 1e-9), 1))
     grid = GasGrid(tuple(float(x) for x in lo), cells, tuple(lengths / cells), tuple(bool(p) for p in periodic))
     triangles = np.concatenate([m.vertices[m.triangles] for m in meshes])
-    cut, _ = cut_links(grid, triangles, 1, spans_period(grid, meshes))
+    cut = cut_links(grid, triangles, 1, spans_period(grid, meshes))
     links = [interior_links(~cut[c], c, grid.periodic[c]) for c in range(3)]
     seeds = np.zeros(cells, bool)
     seeds[:, :, -1] = True

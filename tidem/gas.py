@@ -79,7 +79,8 @@ class GasPhase:
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
         n_walls = len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0)  # wall_k of mesh k: tubes + k
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, n_walls, self.heat,
-                                                 self.sources, self.species, self.open, self.layers, self.band)
+                                                 self.sources, self.species, self.open, self.layers, self.band,
+                                                 self.cut)
         G = self.G
         host = {"p": G.p, "gp2": G.gp[2], "eps": G.eps, **{f"u{c}": G.u[c] for c in range(3)}}
         host.update({name: getattr(G, name) for name, on in (("T", self.heat), ("Y", self.species),
@@ -97,7 +98,7 @@ class GasPhase:
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
                                       self.heat and gas.conduction, wall_grain, wall_umf, self.band,
-                                      self.open is not None)
+                                      self.open is not None, self.cut is not None)
         self.serial_solve = serial_solve(self.solid.size)  # as make_flow_kernels decided
         self.cg_batch = cg_batch()
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(

@@ -1,23 +1,22 @@
 """Mesh walls in the gas grid (scenes with `[[meshes]]` and `[gas]`, plain numpy at set-up): the
-cell faces a mesh blocks, the cells the gas cannot reach, and the open volume of the cells a mesh
-cuts (a first-order, "staircase" representation of the walls: the gas grid is not refined
-along them).
+cells the gas cannot reach, the gas part of the cells a mesh cuts, and the open share (aperture) of
+each face (a cut-cell representation of the walls on the fixed grid, `tidem.gas_apertures`).
 
 Each gas cell is divided into s x s x s sub-cells (`subdivision`). Rays along each axis through
 the sub-cells' centres are cut where they pierce a triangle (a triangle parallel to an axis is
 found by the rays along the other two, so a sheet of any orientation is seen). Then
-- a face between two cells is blocked (CLOSED for the gas) when at least half of the s^2 rays
-  between the two cell centres cross a mesh; an inlet (bottom) or outlet (top) face likewise
-  over the rays between the face and its cell's centre;
-- a cell is solid for the gas, and drops out of the solve, where no path of open faces joins it
-  to an open outlet face (a pocket sealed off by a sheet, even one the inlet feeds: gas could
-  not leave it), or where less than half of its sub-cells are joined to an open outlet through
-  sub-cell links no mesh cuts (a cell mostly inside a closed body, as a cell whose centre lies in
-  a tube is solid; a round tube a few cells across also leaves gaps in the staircase of
-  half-blocked faces); its inlet faces close;
-- a cell's open fraction is the share of its sub-cells that a path of uncut sub-cell links
-  joins to an open outlet; the voidage of a cut cell is taken over that open volume,
-  eps = 1 - V_particles / (f V) (`kernels/gas_coupling.py`), with f at least MIN_OPEN.
+- the wet sub-cells are those joined to an open outlet face through sub-cell links no mesh cuts;
+- a cell's gas part is its largest set of wet sub-cells joined inside it, and a face's aperture the
+  share of its sub-faces open between the two cells' gas parts (`tidem.gas_apertures`); a face with
+  none open is closed (blocked) for the gas;
+- a cell is solid for the gas, and drops out of the solve, where its gas part is less than MIN_PART
+  of it (a sliver, or a cell inside a closed body) or where no path of open faces joins it to an open
+  outlet face (a pocket sealed off by a sheet, even one the inlet feeds: gas could not leave it); its
+  faces close;
+- a cell's open fraction f is its gas part's share of it: the continuity and the gas energy of a cut
+  cell hold f V of gas (`kernels/gas_flow.py`). The voidage of a cut cell is taken over the open
+  volume of `tidem.gas_open_volume`, which counts the wet sub-cells on a finer subdivision
+  (`fine_wet`, `refinement`).
 """
 
 from __future__ import annotations
@@ -26,40 +25,73 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tidem.gas_apertures import face_apertures, gas_parts
+from tidem.grid_graph import bordering, interior_links, reached
 from tidem.kernels.gas_grid import CLOSED, OUTLET, GasGrid
 
-MIN_OPEN = 0.2  # smallest open fraction a reachable cell is given (a sliver cell's voidage stays bounded)
+MIN_OPEN = 0.2  # smallest open volume share a cell's voidage is taken over (`tidem.gas_open_volume`)
+MIN_PART = 1.0 / 3.0  # smallest gas part a cell in the solve has (`tidem.gas_apertures`): a sliver past it is left out
 MAX_SUBCELLS = 4_000_000  # sub-cells of the whole grid at most: s = 4, else 2, else 1
-BLOCKED_SHARE = 0.5  # share of a face's rays a mesh must cut to block it, and of a cell's volume a body must hold to fill it
 
 
 @dataclass
 class GasCut:
     """What the meshes do to the gas grid."""
 
-    blocked: list[np.ndarray]  # per face component: bool [face_shape(c)], blocked by a mesh
+    blocked: list[np.ndarray]  # per face component: bool [face_shape(c)], closed by a mesh beside a cell of the gas
     unreachable: np.ndarray  # bool [cells]: no open path to the outlet
     open_fraction: np.ndarray  # [cells] share of the cell the gas fills (1 where uncut)
     sub: int  # sub-cells per cell and axis
     wet: np.ndarray  # bool [cells x sub per axis]: sub-cells joined to the outlet by uncut links
+    fine: int  # the finer subdivision of `fine_wet` (sub times 3, 2 or 1, `refinement`)
+    fine_wet: np.ndarray  # bool [cells x fine per axis]: `wet` on the finer subdivision (the open volumes')
+    aperture: list[np.ndarray]  # per face component [face_shape(c)]: the open share of each face (`tidem.gas_apertures`)
 
     def open_sub_cells(self, solid: np.ndarray) -> np.ndarray:
-        """bool [cells x sub per axis]: the sub-cells open past the meshes, those the gas reaches (`wet`) and all
-        of a cell `solid` for another reason than the meshes (a tube's: its own test is analytic)."""
-        return self.wet | _fine(solid.astype(bool) & ~self.unreachable.astype(bool), self.sub)
+        """bool [cells x fine per axis]: the fine sub-cells open past the meshes, those the gas reaches
+        (`fine_wet`) and all of a cell `solid` for another reason than the meshes (a tube's: its own test is
+        analytic)."""
+        return self.fine_wet | _fine(solid.astype(bool) & ~self.unreachable.astype(bool), self.fine)
+
+    def mixed_cells(self) -> np.ndarray:
+        """bool [cells]: the cells a mesh cuts, some of their fine sub-cells wet and some not."""
+        share = _coarse(self.fine_wet, self.unreachable.shape, self.fine).mean(axis=(1, 3, 5))
+        return (share > 0.0) & (share < 1.0)
 
     def report_lines(self) -> list[str]:
         cut = (self.open_fraction < 1.0) & ~self.unreachable
         faces = sum(int(b.sum()) for b in self.blocked)
+        shares = np.concatenate([a[(a > 0.0) & (a < 1.0) & ~b].ravel() for a, b in zip(self.aperture, self.blocked)])
         cells = (f"{int(cut.sum())} cut cells (open fraction {self.open_fraction[cut].min():.2f}-"
                  f"{self.open_fraction[cut].max():.2f}, {self.sub}^3 sub-cells per cell)" if cut.any() else "no cut cells")
+        cut_faces = (f"{len(shares)} cut faces (open share {shares.min():.2f}-{shares.max():.2f})" if len(shares)
+                     else "no cut faces")
         return [f"gas grid: {faces} faces blocked by meshes, {int(self.unreachable.sum())} cells the gas cannot "
-                f"reach (solid), {cells}"]
+                f"reach (solid), {cells}, {cut_faces}"]
 
 
 def subdivision(gg: GasGrid) -> int:
     cells = int(np.prod(gg.cells))
     return next(s for s in (4, 2, 1) if cells * s**3 <= MAX_SUBCELLS or s == 1)
+
+
+def refinement(gg: GasGrid, s: int) -> int:
+    """Children per sub-cell and axis of the open volumes' finer subdivision (`GasCut.fine_wet`): 3 or 2 within
+    MAX_SUBCELLS, else 1."""
+    cells = int(np.prod(gg.cells))
+    return next(r for r in (3, 2, 1) if cells * (s * r) ** 3 <= MAX_SUBCELLS or r == 1)
+
+
+def wet_sub_cells(gg: GasGrid, tri: np.ndarray, solid: np.ndarray, kinds: list[np.ndarray], s: int,
+                  clip: np.ndarray | None) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
+    """(wet, the sub-cell links a mesh cuts, the interior ones it does not): the sub-cells (s per cell and axis)
+    joined to an outlet face through links no mesh cuts, never through a `solid` cell."""
+    sub_cut = cut_links(gg, tri, s, clip)
+    shape = tuple(n * s for n in gg.cells)
+    fine_open = [interior_links(~sub_cut[c], c, gg.periodic[c]) for c in range(3)]
+    seeds = np.zeros(shape, bool)
+    seeds[:, :, -1] = np.repeat(np.repeat(kinds[2][:, :, -1] == OUTLET, s, 0), s, 1) & ~sub_cut[2][:, :, -1]
+    return reached(shape, fine_open, gg.periodic, seeds, _fine(solid.astype(bool), s)), sub_cut, fine_open
 
 
 def ray_crossings(gg: GasGrid, tri: np.ndarray, c: int, s: int,
@@ -121,11 +153,10 @@ def _links(gg: GasGrid, c: int, t: np.ndarray, clip: np.ndarray, spacing: float,
     return np.clip(np.floor(x).astype(np.int64) + 1, 0, n), inside
 
 
-def cut_links(gg: GasGrid, tri: np.ndarray, s: int, clip: np.ndarray | None) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """Per axis c: the sub-cell links a mesh cuts (bool, shape of the sub-grid with n_c s + 1
-    links along an open c, n_c s periodic, numbered as `_links` does) and the cell-centre-to-centre
-    rays it cuts (bool, numbered as the faces are, `gas_grid.GasGrid.face_shape`, sub-cells across)."""
-    sub_cut, face_cut = [], []
+def cut_links(gg: GasGrid, tri: np.ndarray, s: int, clip: np.ndarray | None) -> list[np.ndarray]:
+    """Per axis c: the sub-cell links a mesh cuts (bool, shape of the sub-grid with n_c s + 1 links along an
+    open c, n_c s periodic, numbered as `_links` does)."""
+    sub_cut = []
     for c in range(3):
         a, b = [k for k in range(3) if k != c]
         ia, ib, t, clip_c = ray_crossings(gg, tri, c, s, clip)
@@ -133,61 +164,12 @@ def cut_links(gg: GasGrid, tri: np.ndarray, s: int, clip: np.ndarray | None) -> 
         shape = [gg.cells[k] * s for k in range(3)]
         fine = np.zeros([nf if (k == c and gg.periodic[c]) else (nf + 1 if k == c else shape[k]) for k in range(3)],
                         bool)
-        coarse = np.zeros([gg.face_shape(c)[c] if k == c else shape[k] for k in range(3)], bool)
-        for arr, spacing, n in ((fine, gg.h[c] / s, nf), (coarse, gg.h[c], gg.cells[c])):
-            link, inside = _links(gg, c, t, clip_c, spacing, n)
-            if arr is coarse and gg.periodic[c]:
-                link = (link + 1) % n  # as the faces count: face j between cells j - 1 and j
-            idx = [None, None, None]
-            idx[c], idx[a], idx[b] = link[inside], ia[inside], ib[inside]
-            arr[tuple(idx)] = True
+        link, inside = _links(gg, c, t, clip_c, gg.h[c] / s, nf)
+        idx = [None, None, None]
+        idx[c], idx[a], idx[b] = link[inside], ia[inside], ib[inside]
+        fine[tuple(idx)] = True
         sub_cut.append(fine)
-        face_cut.append(coarse)
-    return sub_cut, face_cut
-
-
-def components(n: int, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
-    """Connected-component label (the smallest member) of each of n nodes joined by the edges
-    (ea, eb): hooking of roots and full pointer jumping, a few numpy passes."""
-    label = np.arange(n)
-    while True:
-        la, lb = label[ea], label[eb]
-        lo, hi = np.minimum(la, lb), np.maximum(la, lb)
-        join = lo != hi
-        if not join.any():
-            return label
-        np.minimum.at(label, hi[join], lo[join])  # hi is a root: every label is one after jumping
-        while True:
-            nxt = label[label]
-            if np.array_equal(nxt, label):
-                break
-            label = nxt
-
-
-def reached(shape, open_links: list[np.ndarray], periodic, seeds: np.ndarray, skip: np.ndarray) -> np.ndarray:
-    """Cells of a grid `shape` joined to a seed cell through open links (per axis c, bool over the
-    links between consecutive cells: shape[c] - 1 of them, shape[c] on a periodic axis), never
-    through a `skip` cell."""
-    ids = np.arange(int(np.prod(shape))).reshape(shape)
-    ea, eb = [], []
-    for c in range(3):
-        n = shape[c]
-        lo = np.take(ids, range(n if periodic[c] else n - 1), axis=c)
-        hi = np.take(ids, [(j + 1) % n for j in range(n if periodic[c] else n - 1)], axis=c)
-        ok = open_links[c] & ~skip.flat[lo] & ~skip.flat[hi]
-        ea.append(lo[ok])
-        eb.append(hi[ok])
-    label = components(ids.size, np.concatenate(ea), np.concatenate(eb))
-    hit = np.zeros(ids.size, bool)
-    hit[np.unique(label[seeds.ravel() & ~skip.ravel()])] = True
-    return hit[label].reshape(shape)
-
-
-def interior_links(links: np.ndarray, c: int, periodic: bool) -> np.ndarray:
-    """The links between cells from an array that also holds the two boundary links (open axis)."""
-    return links if periodic else np.take(links, range(1, links.shape[c] - 1), axis=c)
-
-
+    return sub_cut
 
 
 def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[np.ndarray],
@@ -196,35 +178,25 @@ def gas_cut(gg: GasGrid, triangles: np.ndarray, solid: np.ndarray, kinds: list[n
     cells already solid (tubes) and `kinds` their face kinds (`gas_geometry.face_kinds`); `clip`
     [T, 3] as `ray_crossings` takes it (None: every mesh wraps across periodic boundaries)."""
     s = subdivision(gg)
-    sub_cut, face_cut = cut_links(gg, np.asarray(triangles, float), s, clip)
-    blocked = []
-    for c in range(3):
-        split = []  # the face array with each cross axis split into (cells, sub-cells)
-        for k in range(3):
-            split += [face_cut[c].shape[k]] if k == c else [gg.cells[k], s]
-        share = face_cut[c].reshape(split).mean(axis=_sub_axes(c))
-        blocked.append((share >= BLOCKED_SHARE) & (kinds[c] != CLOSED))
-    kinds = [np.where(bl, CLOSED, kd) for bl, kd in zip(blocked, kinds)]
+    tri = np.asarray(triangles, float)
+    wet, sub_cut, fine_open = wet_sub_cells(gg, tri, solid, kinds, s, clip)
+    r = refinement(gg, s)
+    fine_wet = wet if r == 1 else wet_sub_cells(gg, tri, solid, kinds, s * r, clip)[0]
+    parts = gas_parts(gg, s, wet, fine_open)
+    share = _coarse(parts, gg.cells, s).mean(axis=(1, 3, 5))
+    aperture = face_apertures(gg, s, parts, sub_cut)
+    closed = [(aperture[c] == 0.0) & (kinds[c] != CLOSED) for c in range(3)]
+    kinds = [np.where(bl, CLOSED, kd) for bl, kd in zip(closed, kinds)]
     # faces as links between consecutive cells (`reached`): on a periodic axis link j is face j + 1
     open_faces = [np.roll(kinds[c] != CLOSED, -1, axis=c) if gg.periodic[c]
                   else interior_links(kinds[c] != CLOSED, c, False) for c in range(3)]
-    fine_shape = tuple(n * s for n in gg.cells)
-    fine_open = [interior_links(~sub_cut[c], c, gg.periodic[c]) for c in range(3)]
-    fine_seeds = np.zeros(fine_shape, bool)
-    fine_seeds[:, :, -1] = np.repeat(np.repeat(kinds[2][:, :, -1] == OUTLET, s, 0), s, 1) & ~sub_cut[2][:, :, -1]
-    # the sub-cells the gas reaches through links no mesh cuts, whatever their cell: a cell with less than
-    # half of them is mostly inside a body, even where the staircase of half-blocked faces leaves it a way out
-    wet = reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(solid.astype(bool), s))
-    dry = _coarse(wet, gg.cells, s).mean(axis=(1, 3, 5)) < BLOCKED_SHARE
     seeds = np.zeros(gg.cells, bool)
     seeds[:, :, -1] = kinds[2][:, :, -1] == OUTLET
-    reach = reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool) | dry)
+    reach = reached(gg.cells, open_faces, gg.periodic, seeds, solid.astype(bool) | (share < MIN_PART))
     unreachable = ~reach & ~solid.astype(bool)
-    # sub-cells: the open fraction of each cell
-    fine_reach = reached(fine_shape, fine_open, gg.periodic, fine_seeds, _fine(~reach, s))
-    frac = _coarse(fine_reach, gg.cells, s).mean(axis=(1, 3, 5))
-    frac = np.where(reach, np.clip(frac, MIN_OPEN, 1.0), 1.0)
-    return GasCut(blocked=blocked, unreachable=unreachable, open_fraction=frac, sub=s, wet=wet)
+    blocked = [closed[c] & bordering(reach, c, gg.periodic[c]) for c in range(3)]
+    return GasCut(blocked=blocked, unreachable=unreachable, open_fraction=np.where(reach, share, 1.0), sub=s,
+                  wet=wet, fine=s * r, fine_wet=fine_wet, aperture=aperture)
 
 
 def cell_index(gg: GasGrid, x: np.ndarray) -> np.ndarray:
@@ -250,6 +222,3 @@ def _coarse(fine: np.ndarray, cells, s: int) -> np.ndarray:
     return fine.reshape(cells[0], s, cells[1], s, cells[2], s)
 
 
-def _sub_axes(c: int) -> tuple[int, ...]:
-    """Positions of the sub-cell axes in a face array reshaped to (.., cells, s, ..) per cross axis."""
-    return (2, 4) if c == 0 else ((1, 4) if c == 1 else (1, 3))

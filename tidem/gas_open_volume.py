@@ -17,10 +17,12 @@ cell's own open share f_c V is not that volume beside a wall:
 
 Away from walls V_c^open = V, which the weights' partition of unity gives exactly; there the integral is
 not evaluated. Near walls it is a midpoint sum over points in each cell: 12 a side within reach of a tube
-(its round edge sampled at a twelfth of a cell), 4 elsewhere. A point is open outside the tubes and in a
-sub-cell the gas reaches past the meshes (`tidem.gas_mesh.GasCut.wet`, the sub-cells' centres being the
-points at 4 a side). That counts the part of a mesh's sealed cells outside it, as the ring of a tube's solid
-cells outside the tube is counted: grains lie there, and their weights hand them to the cells beside.
+(its round edge sampled at a twelfth of a cell), one per fine sub-cell in the cells beside those a mesh cuts
+(12 a side on grids of up to 2300 cells, 8 up to 7800, 4 beyond, `tidem.gas_mesh.refinement`), 4 elsewhere.
+A point is open outside the tubes and in a fine sub-cell the gas reaches past the meshes
+(`tidem.gas_mesh.GasCut.fine_wet`). That counts the part of a mesh's sealed cells outside it, as the ring of
+a tube's solid cells outside the tube is counted: grains lie there, and their weights hand them to the cells
+beside.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import numpy as np
 
 from tidem.gas_geometry import shifted
 from tidem.gas_mesh import MIN_OPEN, GasCut, cell_index, sub_grid
+from tidem.grid_graph import bordering
 from tidem.kernels.gas_grid import CLOSED, GasGrid, layer_grid
 
 SUB_TUBE = 12  # points per cell along its longest side within reach of a tube (its round edge sampled)
@@ -47,7 +50,7 @@ def open_volumes(gg: GasGrid, solid: np.ndarray, kinds: list[np.ndarray], tubes:
     solid = solid.astype(bool)
     share = None if cut is None else np.where(cut.unreachable.astype(bool), 0.0, cut.open_fraction)
     near = grow(gg, solid | (cut_share(gg, tubes, share) < 1.0), 1)  # gas cells with a wall within one cell
-    mesh = None if cut is None else cut.open_sub_cells(solid)
+    mesh = None if cut is None else (cut.open_sub_cells(solid), grow(gg, cut.mixed_cells(), 1), cut.fine)
     out = {"cells": lattice_open_volume(gg, gg, solid, near, tubes, mesh)}
     for c in range(3):
         lattice = face_lattice(gg, c)
@@ -59,15 +62,20 @@ def open_volumes(gg: GasGrid, solid: np.ndarray, kinds: list[np.ndarray], tubes:
 
 
 def lattice_open_volume(gg: GasGrid, lattice: GasGrid, out_of_gas: np.ndarray, near: np.ndarray,
-                        tubes: list[dict], mesh: np.ndarray | None) -> np.ndarray:
+                        tubes: list[dict], mesh: tuple[np.ndarray, np.ndarray, int] | None) -> np.ndarray:
     """V^open / V of the points of `lattice` (cells, faces or layers; `out_of_gas` there), evaluated where a
-    point lies within two of a point out of the gas or of a gas cell `near` a wall, 1 elsewhere."""
+    point lies within two of a point out of the gas or of a gas cell `near` a wall, 1 elsewhere. `mesh`: (the
+    fine sub-cells open past the meshes, the gas cells beside those the meshes cut, fine sub-cells per cell)."""
     centres = np.asarray(lattice.lo) + (np.indices(lattice.cells).reshape(3, -1).T + 0.5) * np.asarray(lattice.h)
-    special = out_of_gas | near[tuple(gas_cell(gg, centres).T)].reshape(lattice.cells)
+    cell_of = tuple(gas_cell(gg, centres).T)
+    special = out_of_gas | near[cell_of].reshape(lattice.cells)
     sampled, kept = grow(lattice, special, 3), grow(lattice, special, 2)
     by_tube = near_tubes(lattice, tubes)
-    total = sum(masked_integral(gg, lattice, out_of_gas, tubes, mesh, np.argwhere(sampled & part), sub)
-                for part, sub in ((by_tube, SUB_TUBE), (~by_tube, SUB_WALL)) if (sampled & part).any())
+    open_sub, fine = (None, SUB_WALL) if mesh is None else (mesh[0], mesh[2])
+    by_mesh = np.zeros(lattice.cells, bool) if mesh is None else mesh[1][cell_of].reshape(lattice.cells) & ~by_tube
+    parts = ((by_tube, SUB_TUBE), (by_mesh, max(fine, SUB_WALL)), (~by_tube & ~by_mesh, SUB_WALL))
+    total = sum(masked_integral(gg, lattice, out_of_gas, tubes, open_sub, np.argwhere(sampled & part), sub)
+                for part, sub in parts if (sampled & part).any())
     fraction = np.ones(lattice.cells)
     fraction[kept] = total[kept]
     return np.where(out_of_gas, 1.0, np.maximum(fraction, MIN_OPEN))
@@ -83,17 +91,7 @@ def face_lattice(gg: GasGrid, c: int) -> GasGrid:
 def face_in_gas(gg: GasGrid, kind: np.ndarray, solid: np.ndarray, c: int) -> np.ndarray:
     """The faces normal to c the gas's weights use (`kernels/gas_weights.make_in_gas`): not closed, or closed
     but bounding a cell of the gas (a wall's face, normal velocity 0)."""
-    fluid = ~solid.astype(bool)
-    if gg.periodic[c]:
-        bounds = fluid | np.roll(fluid, 1, axis=c)
-    else:
-        pad = [(0, 0)] * 3
-        pad[c] = (1, 0)
-        below = np.pad(fluid, pad)  # the cell below face j is j - 1 (none below face 0)
-        pad[c] = (0, 1)
-        above = np.pad(fluid, pad)  # the cell above face j is j (none above face n)
-        bounds = below | above
-    return (kind != CLOSED) | bounds
+    return (kind != CLOSED) | bordering(~solid.astype(bool), c, gg.periodic[c])
 
 
 def gas_cell(gg: GasGrid, x: np.ndarray) -> np.ndarray:

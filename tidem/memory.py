@@ -114,9 +114,11 @@ def neighbor_bytes(feat, neighbors: int) -> int:
 def gas_cell_bytes(feat, layers: int = 1) -> int:
     """Bytes of the gas grid's Taichi fields per cell (`tidem.gas`), with `layers` voidage layers a cell."""
     fp = feat.float_bytes
-    open_share = bool(feat.n_meshes or feat.n_tubes)  # the cells cut by meshes or beside tubes
+    open_share = 4 * bool(feat.n_meshes or feat.n_tubes)  # open volumes of the cell and its faces beside walls
+    cut = 4 * bool(feat.n_meshes)  # a mesh's gas part of the cell and its faces' apertures
     layered = layers if layers > 1 else 0
-    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share + layered) + 4 * 4
+    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share + cut + layered) \
+        + 4 * 4
 
 
 def averaging_cell_bytes(feat) -> int:
