@@ -19,11 +19,11 @@ import time
 
 CASE = r"""
 import json, sys, time, tomllib
-from tidem.runtime import ensure_taichi
+from tidem.runtime.startup import ensure_taichi
 ensure_taichi("cpu", "float64")
-from tidem.model import build_model
+from tidem.sim.model import build_model
 from tidem.scene.load import resolve, validate
-from tidem.solver import Solver
+from tidem.sim.solver import Solver
 interval, steps = int(sys.argv[1]), int(sys.argv[2])
 raw = tomllib.loads(resolve("fluidized_tube").read_text())
 raw["gas"]["inlet_ramp"] = 0.0

@@ -6,7 +6,7 @@ import json
 import sys
 from pathlib import Path
 
-from tidem.observables import flatten
+from tidem.results.observables import flatten
 
 
 def read(run: Path) -> dict | None:

@@ -14,11 +14,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from tidem import checkpoint
-from tidem.launch import prepare
-from tidem.run_output import Output
+from tidem.runner import checkpoint
+from tidem.runner.launch import prepare
+from tidem.runner.output import Output
 from tidem.scene.load import load
-from tidem.solver import Solver
+from tidem.sim.solver import Solver
 
 
 def timed(fn) -> float:

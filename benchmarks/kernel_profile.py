@@ -19,11 +19,11 @@ import numpy as np
 import taichi as ti
 from taichi.lang import impl
 
-from tidem import runtime
-from tidem.bench import bench_scene, profile_scene, tiled_bed
-from tidem.cli_common import build_or_exit, load_scene, script_main
-from tidem.launch import InputError, load_checkpoint
-from tidem.model import build_model
+from tidem.runtime import startup
+from tidem.studies.bench import bench_scene, profile_scene, tiled_bed
+from tidem.cli.common import build_or_exit, load_scene, script_main
+from tidem.runner.launch import InputError, load_checkpoint
+from tidem.sim.model import build_model
 from tidem.scene.load import validate
 
 
@@ -33,7 +33,7 @@ def main(scene: str, run_dir: str, steps: int = 1000, threads: int = 2, sets: li
     precision = "float64" if peer else loaded.scene.numerics.precision
     ti.init(arch=ti.cpu, default_fp=ti.f64 if precision == "float64" else ti.f32, default_ip=ti.i32,
             cpu_max_num_threads=threads, offline_cache=True, kernel_profiler=True, log_level=ti.ERROR)
-    runtime._current = ("cpu", precision, threads)  # tidem's own init would reset the profiler
+    startup._current = ("cpu", precision, threads)  # tidem's own init would reset the profiler
     if peer:
         x, extent = tiled_bed(peer)
         model = build_model(validate(bench_scene(x, extent, precision), "<bench>"))

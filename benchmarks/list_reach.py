@@ -21,12 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem import checkpoint, runtime
-from tidem.cli_common import build_or_exit, load_scene
-from tidem.kernel_settings import quiet_bounds
-from tidem.launch import load_checkpoint
-from tidem.overlaps import min_image
-from tidem.solver import Solver
+from tidem.runner import checkpoint
+
+from tidem.runtime import startup
+from tidem.cli.common import build_or_exit, load_scene
+from tidem.sim.kernel_settings import quiet_bounds
+from tidem.runner.launch import load_checkpoint
+from tidem.particles.overlaps import min_image
+from tidem.sim.solver import Solver
 
 
 def displacements(S, n, x0, lengths, periodic):
@@ -100,7 +102,7 @@ def intervals(solver, cell, lengths, periodic, builds=4):
 
 
 def main(scene: str, run_dir: str, steps: int = 400, cell: float = 0.004) -> None:
-    runtime.ensure_taichi("cpu", "float64", 2)
+    startup.ensure_taichi("cpu", "float64", 2)
     loaded = load_scene(scene, [])
     model = build_or_exit(loaded)
     solver = Solver(model)

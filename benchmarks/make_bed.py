@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from tidem.io.vtp import read_vtp
-from tidem.model import build_model
-from tidem.run_loop import run
-from tidem.runtime import ensure_taichi
+from tidem.sim.model import build_model
+from tidem.runner.loop import run
+from tidem.runtime.startup import ensure_taichi
 from tidem.scene.load import load
 
 here = Path(__file__).resolve().parent

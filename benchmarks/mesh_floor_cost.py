@@ -12,15 +12,15 @@ import os, sys, json, time, tempfile
 from pathlib import Path
 import numpy as np
 os.environ.setdefault("TI_CPU_MAX_NUM_THREADS", "2")
-from tidem.runtime import ensure_taichi
+from tidem.runtime.startup import ensure_taichi
 ensure_taichi("cpu", "float64", 2)
 import taichi as ti
 import mesh_walls as mw
-import tidem.mesh_bins as mb
-from tidem.bench import advance, bench_scene, tiled_bed
-from tidem.model import build_model
+import tidem.walls.mesh_bins as mb
+from tidem.studies.bench import advance, bench_scene, tiled_bed
+from tidem.sim.model import build_model
 from tidem.scene.load import validate
-from tidem.solver import Solver
+from tidem.sim.solver import Solver
 n = int(sys.argv[1]) if len(sys.argv) > 1 else 100000
 folder = Path(tempfile.mkdtemp())
 x, extent = tiled_bed(n)

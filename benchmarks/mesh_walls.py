@@ -56,7 +56,7 @@ def box_mesh(path: Path, lo, hi) -> None:
 
 
 def scenes(n: int, folder: Path, triangles: int) -> dict:
-    from tidem.bench import bench_scene, tiled_bed
+    from tidem.studies.bench import bench_scene, tiled_bed
 
     x, extent = tiled_bed(n)
     d = 0.001
@@ -87,15 +87,15 @@ def main() -> None:
     args = [int(a) for a in sys.argv[1:]]
     n, rounds, steps, threads, triangles = (args + [200000, 6, 200, 2, 100000][len(args):])[:5]
     os.environ.setdefault("TI_CPU_MAX_NUM_THREADS", str(threads))
-    from tidem.runtime import ensure_taichi
+    from tidem.runtime.startup import ensure_taichi
 
     ensure_taichi("cpu", "float64", threads)
     import taichi as ti
 
-    from tidem.bench import advance
-    from tidem.model import build_model
+    from tidem.studies.bench import advance
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
-    from tidem.solver import Solver
+    from tidem.sim.solver import Solver
 
     folder = Path(tempfile.mkdtemp())
     variants = scenes(n, folder, triangles)

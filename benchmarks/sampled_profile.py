@@ -1,10 +1,10 @@
 """How truly a GPU run's sampled profile books each phase, tried on the CPU, where every lap is exact.
 
 A run on a GPU waits at the phase edges of one step in SAMPLE_EVERY only and shares the steps' time
-out as those steps share theirs (`tidem.phases`). Here a scene's steps from a checkpoint run as a run
+out as those steps share theirs (`tidem.runtime.phases`). Here a scene's steps from a checkpoint run as a run
 takes them (the fused force pass), every lap of every step is recorded, and the exact time per phase
 is compared with what each way of choosing the sampled steps would book: every 16th step (before
-2026-11-28) and `tidem.phases.sampled_step` (evenly over the multiples of every interval).
+2026-11-28) and `tidem.runtime.phases.sampled_step` (evenly over the multiples of every interval).
 
     python benchmarks/sampled_profile.py SCENE RUN_DIR [STEPS [THREADS]] [KEY=VALUE ...]
 
@@ -18,12 +18,14 @@ from pathlib import Path
 import numpy as np
 import taichi as ti
 
-from tidem import checkpoint, runtime
-from tidem.bench import advance
-from tidem.cli_common import build_or_exit, load_scene, script_main
-from tidem.launch import InputError, load_checkpoint
-from tidem.phases import SAMPLE_EVERY, STEP_PHASES, PhaseTimer, clock, sampled_step
-from tidem.solver import Solver
+from tidem.runner import checkpoint
+
+from tidem.runtime import startup
+from tidem.studies.bench import advance
+from tidem.cli.common import build_or_exit, load_scene, script_main
+from tidem.runner.launch import InputError, load_checkpoint
+from tidem.runtime.phases import SAMPLE_EVERY, STEP_PHASES, PhaseTimer, clock, sampled_step
+from tidem.sim.solver import Solver
 
 RULES = {"every 16th step": lambda step: step % SAMPLE_EVERY == 0,
          "sampled_step": lambda step: sampled_step(step, SAMPLE_EVERY)}
@@ -53,7 +55,7 @@ def main(scene: str, run_dir: str, steps: int = 4000, threads: int = 2, sets: li
     precision = loaded.scene.numerics.precision
     ti.init(arch=ti.cpu, default_fp=ti.f64 if precision == "float64" else ti.f32, default_ip=ti.i32,
             cpu_max_num_threads=threads, offline_cache=True, log_level=ti.ERROR)
-    runtime._current = ("cpu", precision, threads)
+    startup._current = ("cpu", precision, threads)
     model = build_or_exit(loaded)
     try:
         start = load_checkpoint(Path(run_dir), loaded, model)

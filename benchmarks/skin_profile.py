@@ -17,9 +17,11 @@ import sys
 
 import numpy as np
 
-from tidem import checkpoint, runtime
-from tidem.bench import profile_scene
-from tidem.cli_common import build_or_exit, load_scene, script_main
+from tidem.runner import checkpoint
+
+from tidem.runtime import startup
+from tidem.studies.bench import profile_scene
+from tidem.cli.common import build_or_exit, load_scene, script_main
 
 CHECK_STEPS = 200
 
@@ -57,7 +59,7 @@ def main(scene: str, run_dir: str, steps: int = 1500, rounds: int = 2, sets: lis
     for r in range(rounds):
         for skin in skins if r % 2 == 0 else skins[::-1]:
             loaded = load_scene(scene, [*sets, f"numerics.skin={skin}", t_end])
-            runtime.ensure_taichi("cpu", loaded.scene.numerics.precision, 2)
+            startup.ensure_taichi("cpu", loaded.scene.numerics.precision, 2)
             model = build_or_exit(loaded)
             result = profile_scene(loaded, steps, 100, model, None, split=False, prepare=prepare)
             table = result["profile"]

@@ -18,14 +18,16 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem import checkpoint, runtime
-from tidem.cli_common import build_or_exit, load_scene
-from tidem.launch import load_checkpoint
-from tidem.solver import Solver
+from tidem.runner import checkpoint
+
+from tidem.runtime import startup
+from tidem.cli.common import build_or_exit, load_scene
+from tidem.runner.launch import load_checkpoint
+from tidem.sim.solver import Solver
 
 
 def main(scene: str, run_dir: str, steps: int = 3000, threads: int = 2) -> None:
-    runtime.ensure_taichi("cpu", "float64", threads)
+    startup.ensure_taichi("cpu", "float64", threads)
     loaded = load_scene(scene, [])
     model = build_or_exit(loaded)
     solver = Solver(model)

@@ -40,9 +40,9 @@ def column(**tables) -> dict:
 
 
 def settle() -> np.ndarray:
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
-    from tidem.solver import Solver
+    from tidem.sim.solver import Solver
 
     raw = column(particles=[{"name": "bed", "material": "sand", "diameter": {"value": D}, "seed": 3,
                              "region": {"min": [0, 0, 0], "max": [L[0], L[1], 0.03]}}],
@@ -68,9 +68,9 @@ def reference(x: np.ndarray, dz: float) -> float:
 
 
 def blow(x: np.ndarray, cell: float, voidage: str = "layered"):
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
-    from tidem.solver import Solver
+    from tidem.sim.solver import Solver
 
     raw = column(particles=[{"name": "bed", "material": "sand", "diameter": {"value": D}, "fixed": True,
                              "positions": x.tolist()}],

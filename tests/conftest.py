@@ -1,7 +1,7 @@
 """One Taichi initialisation (CPU, float64) per test process, and scene helpers.
 
 The suite compiles the kernels of many small scenes once each, so it compiles them without
-Taichi's IR optimization (`TIDEM_COMPILE=fast`, see `tidem/runtime.py`): a third of the compile
+Taichi's IR optimization (`TIDEM_COMPILE=fast`, see `tidem/runtime/startup.py`): a third of the compile
 time for the same kernels. README's test command runs two pytest-xdist
 workers, because compiling is single-threaded.
 """
@@ -14,7 +14,7 @@ import pytest
 os.environ.setdefault("TIDEM_COMPILE", "fast")
 os.environ.setdefault("TI_ENABLE_PYBUF", "0")  # pytest's captured stdout would make Taichi print after every launch
 
-from tidem.runtime import ensure_taichi  # noqa: E402  (after TIDEM_COMPILE is set)
+from tidem.runtime.startup import ensure_taichi  # noqa: E402  (after TIDEM_COMPILE is set)
 
 ensure_taichi("cpu", "float64")
 
@@ -42,9 +42,9 @@ def make_scene(**tables) -> dict:
 @pytest.fixture
 def solver_for():
     """Build a Solver from a raw scene dict; released after the test."""
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
-    from tidem.solver import Solver
+    from tidem.sim.solver import Solver
 
     made = []
 

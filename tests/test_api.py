@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 import tidem
-from tidem.cli import app
+from tidem.cli.commands import app
 
 QUICK = {"output.snapshots": 4}
 

@@ -1,6 +1,7 @@
 """The package's import graph (read with ast, nothing imported or compiled): no module imports
-itself back through others, scene validation (tidem/scene/) stands on nothing above it, and
-the kernels (kernels/, installed as tidem.kernels) import nothing of tidem outside kernels/, and
+itself back through others, each package of tidem/ imports only from itself and from packages of
+a lower layer (LAYERS, drawn in tidem/__init__.py and docs/architecture.md), scene validation
+(tidem/scene/) stands on nothing above it, and the kernels (kernels/, installed as tidem.kernels) import nothing of tidem outside kernels/, and
 every name a script of benchmarks/ imports from tidem exists (no test runs those scripts).
 
 Imports inside functions count like those at the top of a module: a lazy import only moves
@@ -11,6 +12,21 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"tidem": ROOT / "tidem", "tidem.kernels": ROOT / "kernels"}
+LAYERS = {
+    "tidem.version": 0, "tidem.scene": 0, "tidem.io": 0, "tidem.analytic": 0, "tidem.runtime": 0,
+    "tidem.walls": 1,
+    "tidem.gas": 2,
+    "tidem.particles": 3, "tidem.heat": 3,
+    "tidem.results": 4,
+    "tidem.sim": 5, "tidem.render": 5,
+    "tidem.runner": 6,
+    "tidem.studies": 7,
+    "tidem.api": 8, "tidem.cli": 8,
+    "tidem": 9, "tidem.__main__": 9,
+}
+"""Layer of each package (or top-level module) of tidem/: a module may import its own package and
+any package of a strictly lower layer, never one of its own layer or above. tidem.kernels, which
+imports nothing of tidem, may be imported from any layer."""
 
 
 def modules() -> dict[str, Path]:
@@ -37,7 +53,7 @@ def imported(name: str, path: Path, known: set[str]) -> set[str]:
             if node.level:
                 anchor = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
                 base = f"{anchor}.{base}" if base else anchor
-            # `from tidem.kernels import contact_laws` imports a module, `from tidem.model import Model` a name
+            # `from tidem.kernels import contact_laws` imports a module, `from tidem.sim.model import Model` a name
             targets = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base for alias in node.names]
         else:
             continue
@@ -76,6 +92,43 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
 def test_no_import_cycles():
     cycle = find_cycle(import_graph())
     assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+def unit(module: str) -> str:
+    """The entry of LAYERS a module belongs to: its package (tidem.gas.phase -> tidem.gas), or itself."""
+    parts = module.split(".")
+    return next((u for u in (".".join(parts[:n]) for n in range(len(parts), 0, -1)) if u in LAYERS), module)
+
+
+def layer_violations(graph: dict[str, set[str]]) -> list[str]:
+    """`module -> imported` for each import into the module's own layer or above, other package."""
+    bad = []
+    for module, targets in graph.items():
+        if module.startswith("tidem.kernels"):
+            continue
+        for target in targets:
+            if target.startswith("tidem.kernels") or unit(target) == unit(module):
+                continue
+            if LAYERS[unit(target)] >= LAYERS[unit(module)]:
+                bad.append(f"{module} (layer {LAYERS[unit(module)]}) -> {target} (layer {LAYERS[unit(target)]})")
+    return sorted(bad)
+
+
+def test_every_module_has_a_layer():
+    unplaced = sorted(m for m in import_graph() if not m.startswith("tidem.kernels") and unit(m) not in LAYERS)
+    assert not unplaced, f"modules of no layer (add their package to LAYERS): {unplaced}"
+
+
+def test_packages_import_only_lower_layers():
+    bad = layer_violations(import_graph())
+    assert not bad, "imports into the same layer or above:\n" + "\n".join(bad)
+
+
+def test_the_layer_check_catches_an_upward_import():
+    graph = {"tidem.gas.phase": {"tidem.sim.model", "tidem.walls.mesh_bins", "tidem.gas.fields"},
+             "tidem.heat.limits": {"tidem.particles.timestep", "tidem.kernels.heat"}}
+    assert layer_violations(graph) == ["tidem.gas.phase (layer 2) -> tidem.sim.model (layer 5)",
+                                       "tidem.heat.limits (layer 3) -> tidem.particles.timestep (layer 3)"]
 
 
 def test_scene_validation_imports_nothing_above_it():
@@ -129,6 +182,6 @@ def missing_benchmark_imports() -> list[str]:
 
 
 def test_benchmark_scripts_import_what_exists():
-    """kernel_repeat.py and resume_speed.py imported `tidem.cli._checkpoint` after it had moved
-    (tidem.launch.load_checkpoint): found only by running them."""
+    """kernel_repeat.py and resume_speed.py imported `tidem.cli.commands._checkpoint` after it had moved
+    (tidem.runner.launch.load_checkpoint): found only by running them."""
     assert missing_benchmark_imports() == []

@@ -1,11 +1,23 @@
 """tidem: hot granular flows (DEM, heat, gas coupling) in Taichi.
 
 The Python API (`tidem.api`, docs/python_api.md): `tidem.load_scene`, `tidem.run`,
-`tidem.read_run`. Layout: this folder holds the set-up and run side (scene -> Model -> State ->
-Solver -> run loop -> outputs -> renderer); the Taichi kernels live in the top-level folder
-`kernels/`, installed as the subpackage `tidem.kernels` (pyproject.toml's package-dir), so
-`tidem.kernels.contact` is the file `kernels/contact.py`. docs/architecture.md gives the data
-flow, where each physics model lives and how to add one.
+`tidem.read_run`. Layout: packages by subject, in layers; a module imports only from its own
+package and from lower layers (tests/test_import_graph.py holds the table):
+
+    0  version, scene/, io/, analytic/, runtime/
+    1  walls/       box sides, walls, tubes, triangle meshes
+    2  gas/         the gas grid, its fields and kernels' driver, mesh walls in the gas
+    3  particles/   placement, pours, storage order, contact parameters; heat/  heat and reactions
+    4  results/     observables and measurements of a run
+    5  sim/         Model, State, Solver; render/  frames, movies, plots, the live view
+    6  runner/      launch, run loop, output, checkpoints
+    7  studies/     tradeoff, sweep, bench
+    8  api, cli/
+
+The Taichi kernels live in the top-level folder `kernels/`, installed as the subpackage
+`tidem.kernels` (pyproject.toml's package-dir), so `tidem.kernels.contact` is the file
+`kernels/contact.py`; they import nothing of tidem outside kernels/. docs/architecture.md gives
+the data flow, where each scene key and physics model lives and how to add one.
 """
 
 import os as _os

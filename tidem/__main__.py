@@ -1,5 +1,5 @@
 """`python -m tidem` runs the command-line interface."""
 
-from tidem.cli import main
+from tidem.cli.commands import main
 
 main()

@@ -6,7 +6,7 @@
     run.observables["pressure_fluctuation"], run.series["gas_pressure_drop_Pa"]
     run = tidem.read_run("runs/ft")                                  # the same, read back later
 
-`tidem scene` is built on the same functions (`tidem.scene.load.load`, `tidem.launch.prepare`
+`tidem scene` is built on the same functions (`tidem.scene.load.load`, `tidem.runner.launch.prepare`
 and `execute`), so a scene, its overrides and its errors behave as on the command line; the
 errors are exceptions carrying the CLI's message: `SceneError` (the scene file or an override),
 `InputError` (an option, the output folder, a checkpoint), `RunFailed` (the run stopped: NaN,
@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from tidem.launch import InputError, OutputLost
+from tidem.runner.launch import InputError, OutputLost
 from tidem.scene.errors import SceneError
 
 __all__ = ["load_scene", "run", "read_run", "RunFolder", "RunFailed", "RunInterrupted", "SceneError", "InputError",
@@ -79,7 +79,7 @@ def run(scene, out: str | Path | None = None, *, render: bool = False, plots: bo
     bar and the lines `tidem scene` prints; `t_end`, `smoke` and `arch` are the CLI's --t-end,
     --smoke and --arch. Raises SceneError, InputError, RunFailed, RunInterrupted or OutputLost (module
     docstring)."""
-    from tidem import launch
+    from tidem.runner import launch
     from tidem.scene.load import LoadedScene
 
     loaded = scene if isinstance(scene, LoadedScene) else load_scene(scene)
@@ -143,7 +143,7 @@ class RunFolder:
     @property
     def values(self) -> dict[str, float]:
         """The observables' numbers as one {column: value} table (what `tidem tradeoff` compares)."""
-        from tidem.observables import flatten
+        from tidem.results.observables import flatten
 
         return flatten(self.observables)
 

@@ -66,15 +66,15 @@ def drum_scene(x: np.ndarray, v: np.ndarray, stl: str) -> dict:
 
 
 def time_tidem(dump: str, stl: str, nwarm: int, nsteps: int, threads: int) -> None:
-    from tidem.runtime import ensure_taichi
+    from tidem.runtime.startup import ensure_taichi
 
     ensure_taichi("cpu", "float64", threads)
     import taichi as ti
 
-    from tidem.bench import advance
-    from tidem.model import build_model
+    from tidem.studies.bench import advance
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
-    from tidem.solver import Solver
+    from tidem.sim.solver import Solver
 
     x, v = read_dump(dump)
     solver = Solver(build_model(validate(drum_scene(x, v, stl), "<drum>")))

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.observables import RunRecord, discharge_rate
+from tidem.results.observables import RunRecord, discharge_rate
 from tidem.render.plots import read_series
 
 D = 0.004  # mean bead diameter [m]
@@ -39,7 +39,7 @@ def run(out: Path, b: float, fill: float) -> dict:
                         "--set", f"meshes[0].offset=[{-off},0.0,0.0]", "--set", f"meshes[1].offset=[{off},0.0,0.0]",
                         "--set", f"particles[0].region.max=[0.1,0.02,{fill}]",
                         "--set", f"domain.max=[0.1,0.02,{fill + 0.05}]"], check=True)
-    series = read_series(folder / "timeseries.csv")  # the observable computed anew: `tidem.observables`
+    series = read_series(folder / "timeseries.csv")  # the observable computed anew: `tidem.results.observables`
     zero = np.zeros((0, 3))
     obs = discharge_rate(RunRecord(time_s=float(series["time_s"][-1]), x=zero, v=zero, mass=np.zeros(0),
                                    radius=np.zeros(0), v0=zero, floor_z=0.0, series=series))

@@ -6,7 +6,7 @@
 Fixed grains (1 mm, or --grain) on a cubic lattice, air at 0.3 m/s over the inlet, 20 gas steps; the pressure drop
 against `tidem.analytic.ergun.tapered_bed_ergun` (Ergun's gradient at each layer's voidage and at the
 flow over the open cross-section there, plus the gas's weight), the flow read on the outlet faces:
-- wedge: the bed of tests/test_gas_mesh.py (two plates leaning 11.3 degrees, a 24 mm slot, a 4 mm slab);
+- wedge: the bed of tests/gas/test_mesh.py (two plates leaning 11.3 degrees, a 24 mm slot, a 4 mm slab);
 - channel: the same with the plates upright, 24 mm apart (a straight channel of mesh walls);
 - cone: a 64-facet truncated cone from r = 12 mm on the distributor to 24 mm at 80 mm, with a lid from its
   rim to the side walls (so no gas passes outside it), filled up to 50 mm (`inside_mesh`), 35 000 grains;
@@ -25,8 +25,8 @@ import numpy as np
 import pyvista as pv
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from tests.test_gas_mesh import tapered_drop, wedge_bed  # noqa: E402
-from tidem.runtime import ensure_taichi  # noqa: E402
+from tests.gas.test_mesh import tapered_drop, wedge_bed  # noqa: E402
+from tidem.runtime.startup import ensure_taichi  # noqa: E402
 
 CASES = ("wedge", "channel", "cone", "column")
 R0, R1, H, FACETS, HALF = 0.012, 0.024, 0.08, 64, 0.026
@@ -94,9 +94,9 @@ def held_share(solver, grains: int, d: float) -> float:
 
 
 def main(cells: list[float], d: float, cases: list[str]) -> None:
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
-    from tidem.solver import Solver
+    from tidem.sim.solver import Solver
 
     ensure_taichi("cpu", "float64")
     with TemporaryDirectory() as tmp:

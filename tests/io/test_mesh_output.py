@@ -6,7 +6,7 @@ import numpy as np
 
 from tidem.io.mesh_output import PVD_NAME, MeshOutput, mesh_file, mesh_geometry
 from tidem.io.vtp import read_vtp_triangles, write_vtp_triangles
-from tidem.mesh_walls import MeshWall
+from tidem.walls.mesh_walls import MeshWall
 
 CUBE_V = np.array([[x, y, z] for x in (0.0, 0.1) for y in (0.0, 0.1) for z in (0.0, 0.1)])
 CUBE_T = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
@@ -89,12 +89,12 @@ def test_resume_keeps_the_moving_mesh_files_of_kept_snapshots_only(tmp_path):
 
 
 def test_a_run_writes_its_meshes_and_names_them_in_run_json(tmp_path):
-    """tidem.run_loop wires MeshOutput in: the folder, meshes.pvd beside snapshots.pvd, run.json."""
+    """tidem.runner.loop wires MeshOutput in: the folder, meshes.pvd beside snapshots.pvd, run.json."""
     import json
 
     from tests.conftest import make_scene
-    from tidem.model import build_model
-    from tidem.run_loop import run
+    from tidem.sim.model import build_model
+    from tidem.runner.loop import run
     from tidem.scene.load import validate
 
     model = build_model(validate(make_scene(numerics={"t_end": 2e-5}, output={"snapshots": 2})))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.kernel_settings import quiet_bounds
+from tidem.sim.kernel_settings import quiet_bounds
 from tidem.kernels.geometry import slab_axis_for, slab_layout
 
 
@@ -225,7 +225,7 @@ def test_the_counting_sort_in_parallel_loops_builds_the_same_rows(solver_for, mo
 
 
 def test_capacity_overflow_is_an_error(solver_for):
-    from tidem.solver import RunError
+    from tidem.sim.solver import RunError
 
     side = 0.001 + 0.00205 * np.arange(4)  # a cubic lattice just wider than d, with a skin that reaches the
     x = np.stack(np.meshgrid(side, side, side, indexing="ij"), axis=-1).reshape(-1, 3)  # face diagonals:

@@ -56,7 +56,7 @@ def test_pressure_probes_read_the_layer_means_and_the_ergun_gradient(solver_for)
     """gas.pressure_probes: a probe on a layer's centre reads that layer's mean pressure, one between
     two centres their linear interpolation, and two probes in the packed bed differ by Ergun's
     gradient (plus the gas weight) over their distance; a height outside the domain is refused."""
-    from tidem.gas import probe_column
+    from tidem.gas.phase import probe_column
 
     u = 0.3
     s = solver_for(packed_column(u, pressure_probes=[0.006, 0.007, 0.018]))
@@ -268,7 +268,7 @@ def test_a_tube_thinner_than_a_gas_cell_still_fills_one(centre):
     """A 6 mm tube on 10 mm cells holds no cell centre: it fills the one row of cells nearest
     its axis (on a cell edge or corner too) and keeps its whole surface pi D L for the gas
     convection."""
-    from tidem.gas_geometry import solid_cells, tube_walls
+    from tidem.gas.geometry import solid_cells, tube_walls
     from tidem.kernels.gas_grid import GasGrid
 
     gg = GasGrid(lo=(0.0, 0.0, 0.0), cells=(10, 2, 10), h=(0.01, 0.01, 0.01), periodic=(False, True, False))
@@ -284,7 +284,7 @@ def test_a_tube_thinner_than_a_gas_cell_still_fills_one(centre):
     ({"cell_size": 0.004, "inlet_temperature": 400.0}, "gas temperatures need a [heat] table"),
 ])
 def test_bad_gas_input_is_named(gas, fragment):
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
 
     raw = packed_column(0.1)

@@ -192,7 +192,7 @@ def test_wall_contact_conductance_matches_the_formula(solver_for):
 
 
 def test_unstable_thermal_step_is_refused():
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.errors import SceneError
     from tidem.scene.load import validate
 
@@ -215,7 +215,7 @@ def test_no_heat_table_builds_no_thermal_state(solver_for):
 def test_tube_heat_lands_in_the_angle_bin_of_the_contact(solver_for):
     """A fixed particle on the flank of a hot tube at omega = 80 deg from the top: all the tube's
     heat goes through the sector [45, 90) deg, and the profile's mean equals the tube's heat flow."""
-    from tidem.run_tables import alpha_profile
+    from tidem.results.tables import alpha_profile
 
     r_t, overlap = 0.01, 1e-5
     raw = make_scene(

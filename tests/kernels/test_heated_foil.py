@@ -105,7 +105,7 @@ def test_heated_foil_wall_and_touching_sphere_follow_the_two_body_solution(solve
 def test_alpha_of_a_foil_is_the_flux_over_the_foil_excess(solver_for):
     """Source 3 eq. 4: alpha(omega) = q / (T_foil(omega) - T_ref), time-averaged since
     heat.profile_start; the storage share says how far from steady the foil still is."""
-    from tidem.run_tables import alpha_profile
+    from tidem.results.tables import alpha_profile
 
     s = solver_for(foil_scene())
     s.step()  # the profile starts at the end of the first step (heat.profile_start = 0)

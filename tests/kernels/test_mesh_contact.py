@@ -57,7 +57,7 @@ def test_plane_of_irregular_triangles_follows_the_analytic_plane(solver_for, tmp
     """Both narrow phases: the flat patch's (the face under the centre alone) and, with every triangle a
     patch of its own, the general one (nearest points of all listed triangles, duplicates suppressed)."""
     if patches != "one flat patch":
-        monkeypatch.setattr("tidem.mesh_bins.flat_patches", lambda v, t: np.arange(len(t)))
+        monkeypatch.setattr("tidem.walls.mesh_bins.flat_patches", lambda v, t: np.arange(len(t)))
     path, n_tri = irregular_square(tmp_path / "plane.stl", 0.1)
     assert n_tri >= 200
     wall = solver_for(bouncing_sphere())

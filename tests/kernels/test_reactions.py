@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.reactions import (ENTHALPY_OUT, GONE, H_CO, H_CO2, HEAT_RELEASED, LATENT, M_C, M_O2, O2_USED, R_GAS,
+from tidem.heat.reactions import (ENTHALPY_OUT, GONE, H_CO, H_CO2, HEAT_RELEASED, LATENT, M_C, M_O2, O2_USED, R_GAS,
                              REACTED)
 from tidem.scene.errors import SceneError
-from tidem.solver import RunError
+from tidem.sim.solver import RunError
 
 T_BED, RHO_G, MU_G, CP_G, K_G = 1123.0, 0.315, 4.5e-5, 1150.0, 0.07
 D_O2, X_O2, P = 2.0e-4, 0.21, 101325.0
@@ -363,7 +363,7 @@ def test_sublimating_cloud_cools_its_gas_by_the_heat_taken(solver_for):
      "set domain.walls = \"none\""),
 ])
 def test_bad_reaction_input_is_named(change, fragment):
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
 
     raw = char_scene([[0.004, 0.004, 0.004]])
@@ -374,7 +374,7 @@ def test_bad_reaction_input_is_named(change, fragment):
 
 
 def test_too_long_step_for_sublimation_is_refused():
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.scene.load import validate
 
     raw = plasma_scene([[0.001, 0.001, 0.001]])

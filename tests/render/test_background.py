@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from tidem.cli import app
+from tidem.cli.commands import app
 from tidem.io.vtp import write_pvd, write_vtp
 from tidem.render.background import BackgroundRenderer
 from tidem.render.gl import RenderUnavailable, prepare_offscreen
@@ -96,7 +96,7 @@ def test_worker_dies_with_its_parent(tmp_path):
 
 def test_ctrl_c_during_the_run_keeps_finished_frames_and_stops_the_worker(tmp_path, monkeypatch):
     from tidem.render import background
-    from tidem.solver import Solver
+    from tidem.sim.solver import Solver
 
     started = []
     real_call = background.BackgroundRenderer.__call__

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from tidem.cli import app
+from tidem.cli.commands import app
 from tidem.io.vtp import write_vtp
 from tidem.render.frames import FrameStyle, bar_format, frame_size, render_frame
 from tidem.render.gl import RenderUnavailable, prepare_offscreen

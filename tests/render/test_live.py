@@ -15,7 +15,7 @@ import pytest
 from typer.testing import CliRunner
 
 from tests.conftest import make_scene
-from tidem.cli import app
+from tidem.cli.commands import app
 
 STEEL = {"density": 7800.0, "youngs_modulus": 2e9, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.3,
          "conductivity": 16.0, "heat_capacity": 500.0}

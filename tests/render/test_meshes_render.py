@@ -9,7 +9,7 @@ import pytest
 
 from tidem.io.mesh_output import MeshOutput, mesh_geometry
 from tidem.io.vtp import write_pvd, write_vtp
-from tidem.mesh_walls import MeshWall
+from tidem.walls.mesh_walls import MeshWall
 from tidem.render.frames import FrameStyle, frame_size, render_frame
 from tidem.render.gl import RenderUnavailable, prepare_offscreen
 from tidem.render.meshes import mesh_surface
@@ -131,7 +131,7 @@ def test_run_folder_meshes_reach_the_frames_through_run_json(tmp_path):
 
 def test_colour_range_spans_the_meshes_temperature_and_speed():
     from tests.conftest import make_scene
-    from tidem.model import build_model
+    from tidem.sim.model import build_model
     from tidem.render.settings import default_range
     from tidem.scene.load import validate
 

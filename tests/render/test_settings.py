@@ -5,7 +5,7 @@ import math
 import pytest
 
 from tests.conftest import make_scene
-from tidem.model import build_model
+from tidem.sim.model import build_model
 from tidem.render.settings import default_range, render_settings
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate

@@ -5,7 +5,7 @@ import tomllib
 import pytest
 from typer.testing import CliRunner
 
-from tidem.cli import app
+from tidem.cli.commands import app
 from tidem.scene.load import SceneError, resolve
 
 runner = CliRunner()

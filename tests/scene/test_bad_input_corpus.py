@@ -8,7 +8,7 @@ import stat
 import pytest
 from typer.testing import CliRunner
 
-from tidem.cli import app
+from tidem.cli.commands import app
 
 runner = CliRunner()
 

@@ -1,4 +1,4 @@
-"""Triangle-mesh walls (`model.meshes`, `tidem.mesh_walls.MeshWall`) in a run folder, for
+"""Triangle-mesh walls (`model.meshes`, `tidem.walls.mesh_walls.MeshWall`) in a run folder, for
 ParaView and for the frames.
 
     meshes/mesh<k>.vtp          mesh k at t = 0, written once when the run folder is set up;
@@ -47,7 +47,7 @@ def _arrays(mesh) -> dict[str, np.ndarray]:
 
 class MeshOutput:
     """The meshes of one run folder. `entries` is the run's snapshot list ((time, file) rows of
-    snapshots.pvd), shared with `tidem.run_output.Output`: row i is snapshot number i."""
+    snapshots.pvd), shared with `tidem.runner.output.Output`: row i is snapshot number i."""
 
     def __init__(self, run_dir: Path, meshes: list, entries: list[tuple[float, str]]):
         """Write each mesh at t = 0; on a resumed run (`entries` not empty) keep the moving meshes'

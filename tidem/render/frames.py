@@ -46,7 +46,7 @@ class FrameStyle:
     periodic: tuple[bool, bool, bool] = (False, False, False)
     slice_thickness: float | None = None
     distributor: list[dict] = dc_field(default_factory=list)  # gas inlet parts: x, y ranges [m], velocity [m/s]
-    meshes: list = dc_field(default_factory=list)  # tidem.mesh_walls.MeshWall at t = 0 (tidem.render.meshes.load_meshes)
+    meshes: list = dc_field(default_factory=list)  # tidem.walls.mesh_walls.MeshWall at t = 0 (tidem.render.meshes.load_meshes)
 
 
 def field_values(field: str, data: dict) -> np.ndarray:

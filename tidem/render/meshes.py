@@ -2,7 +2,7 @@
 
 The renderer learns the meshes from the run folder alone: run.json's `render_geometry.meshes`
 (`tidem.io.mesh_output.mesh_geometry`) names each mesh's file at t = 0 and its rigid motion, and
-`load_meshes` turns them back into `tidem.mesh_walls.MeshWall`s, read once per rendering; a moving
+`load_meshes` turns them back into `tidem.walls.mesh_walls.MeshWall`s, read once per rendering; a moving
 mesh is moved to each frame's time with `MeshWall.points_at`.
 
 A closed vessel or a drum would hide the bed, so the half of each mesh in front of the bed is
@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from tidem.io.vtp import read_vtp_triangles
-from tidem.mesh_walls import MeshWall
+from tidem.walls.mesh_walls import MeshWall
 
 GREY = "#b8bcc2"  # brushed steel
 EDGE = "#5a5f66"  # the cut's edge of an unheated mesh

@@ -3,7 +3,7 @@
 - `hydrodynamics.png` (runs with a gas): the pressure drop with its mean over the second half
   and the bed's weight per area (run.json `bed_weight_per_area_Pa`, the drop a fully fluidized
   bed carries), its spectrum over the second half with the dominant frequency marked when the
-  window holds five of its periods (`tidem.hydrodynamics`, as the `pressure_fluctuation`
+  window holds five of its periods (`tidem.results.hydrodynamics`, as the `pressure_fluctuation`
   observable), and the bed height with its mean over the second half;
 - `heat.png` (runs with heated surfaces): heat flow of each heated surface and each heated
   tube's alpha with a running mean, particle and gas temperatures;
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.hydrodynamics import MIN_PERIODS, dominant_frequency, second_half, spectrum
+from tidem.results.hydrodynamics import MIN_PERIODS, dominant_frequency, second_half, spectrum
 
 LABELS = {
     "kinetic_energy_J": "Kinetic energy [J]",

@@ -1,6 +1,6 @@
 """The control volumes of a scene's [averaging] table (source 3, Bartsch 2020, eq. 34-36):
 cells in the x-z plane and ring sectors around tubes, sized from the scene alone, so that the
-scene checks and the Model see the same layout. Sampling and output: `tidem.averaging`.
+scene checks and the Model see the same layout. Sampling and output: `tidem.results.averaging`.
 """
 
 from __future__ import annotations

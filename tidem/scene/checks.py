@@ -267,7 +267,7 @@ def tube_overlap_checks(scene: Scene) -> list[str]:
 
 def mesh_checks(scene: Scene) -> list[str]:
     """What the [[meshes]] tables can be checked for without reading their files (the files
-    are read by the Model: tidem.mesh_load)."""
+    are read by the Model: tidem.walls.mesh_load)."""
     errs = [f"particles[{i}].inside_mesh: there is no meshes[{g.inside_mesh}] ({len(scene.meshes)} [[meshes]] "
             f"in the scene)" for i, g in enumerate(scene.particles)
             if g.inside_mesh is not None and g.inside_mesh >= len(scene.meshes)]
@@ -381,7 +381,7 @@ def cross_checks(scene: Scene) -> list[str]:
     errs += coarse_grain_checks(scene)
 
     dmax = max_diameter(scene)
-    lens = 0.5 * scene.heat.fluid_layer if scene.heat is not None else 0.0  # the gas-lens reach (tidem.model)
+    lens = 0.5 * scene.heat.fluid_layer if scene.heat is not None else 0.0  # the gas-lens reach (tidem.sim.model)
     cell = dmax * (1.0 + scene.numerics.skin + lens)
     for ax in dom.periodic:
         a = AXES.index(ax)

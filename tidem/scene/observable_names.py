@@ -1,5 +1,5 @@
 """The observable names a scene may declare (`observables = [...]`) and what each needs of the
-scene (a heated tube, a gas phase). Scene validation reads this table; `tidem.observables`
+scene (a heated tube, a gas phase). Scene validation reads this table; `tidem.results.observables`
 registers one compute function under each name (a test checks that the two agree).
 """
 

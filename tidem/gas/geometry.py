@@ -1,0 +1,220 @@
+"""The gas grid of a scene's `[gas]` table, set-up side (plain numpy; the grid's index maths is
+`kernels/gas_grid.py`): cells of about `gas.cell_size`, the cells inside tubes (walls for the
+gas), the kind of every face (closed, interior, inlet at the bottom, outlet at the top), the
+inlet velocity of each bottom face and the tube (and heated mesh) surface each cell borders
+(gas-tube convection). Meshes cut the grid in `tidem.gas.mesh` (blocked faces, cells the gas cannot
+reach, open volume of cut cells); `gas_walls` puts tubes and meshes together; the open volume each
+cell's voidage is taken over is `tidem.gas.open_volume`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tidem.gas.mesh import GasCut, gas_cut
+from tidem.gas.mesh_convection import inward_sides, wetted_area
+from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET
+from tidem.kernels.gas_grid import GasGrid
+
+
+def gas_grid(scene) -> GasGrid:
+    """Cells of about `gas.cell_size` (a whole number per axis) over the domain."""
+    dom = scene.domain
+    cells, h = [], []
+    for a in range(3):
+        length = dom.max[a] - dom.min[a]
+        n = max(1, int(round(length / scene.gas.cell_size)))
+        cells.append(n)
+        h.append(length / n)
+    periodic = tuple("xyz"[a] in dom.periodic for a in range(3))
+    return GasGrid(lo=tuple(dom.min), cells=tuple(cells), h=tuple(h), periodic=periodic)
+
+
+def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:
+    """The cells a tube fills for the gas: those whose centre lies inside it, or, for a tube
+    too thin to hold a cell centre, the one row of cells along its axis nearest to it (the
+    first of equals on a cell edge or corner), so that every tube blocks the gas and exchanges
+    heat with it. Tubes centred on cell centres are represented best."""
+    idx = np.indices(gg.cells).reshape(3, -1).T
+    centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
+    mask = np.asarray(tube["mask"])
+    d = (centres - np.asarray(tube["c"])) * mask
+    dist2 = np.einsum("ij,ij->i", d, d)
+    inside = dist2 < tube["r"] ** 2
+    if not inside.any():
+        across = mask > 0  # the two axes across the tube
+        nearest = idx[np.argmin(dist2)]
+        inside = (idx[:, across] == nearest[across]).all(axis=1)
+    return inside.reshape(gg.cells)
+
+
+def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
+    """1 for the cells a tube fills (`tube_cells`: wall for the gas)."""
+    solid = np.zeros(gg.cells, np.int32)
+    for t in tubes:
+        solid |= tube_cells(gg, t).astype(np.int32)
+    return solid
+
+
+def gas_walls(gg: GasGrid, tubes: list[dict], meshes: list,
+              cut: GasCut | None = None) -> tuple[np.ndarray, list[np.ndarray], GasCut | None]:
+    """The walls the gas sees: solid cells (in a tube, or out of the gas's reach behind a mesh),
+    face kinds (`face_kinds`, with the faces a mesh blocks closed), and the meshes' cut of the grid
+    (`cut` if given, as the Model keeps it; None without meshes; meshes are static when there is
+    gas, `tidem.scene.checks`)."""
+    solid = solid_cells(gg, tubes)
+    kinds = face_kinds(gg, solid)
+    if not meshes:
+        return solid, kinds, None
+    if cut is None:
+        triangles = np.concatenate([m.vertices[m.triangles] for m in meshes])
+        cut = gas_cut(gg, triangles, solid, kinds, spans_period(gg, meshes))
+    solid = solid | cut.unreachable.astype(np.int32)
+    kinds = [np.where(b, CLOSED, k) for b, k in zip(cut.blocked, face_kinds(gg, solid))]
+    return solid, kinds, cut
+
+
+def spans_period(gg: GasGrid, meshes: list) -> np.ndarray:
+    """[T, 3] per triangle (all meshes in order) and axis: the axis is periodic and the triangle's
+    mesh spans the whole period along it, so that what it holds beyond the period is not part of
+    the apparatus (the particles' rule, `mesh_bins.triangle_table`); elsewhere a mesh wraps."""
+    rows = [np.tile([gg.periodic[a] and m.spans(a, gg.lo[a], gg.cells[a] * gg.h[a]) for a in range(3)],
+                    (len(m.triangles), 1)) for m in meshes]
+    return np.concatenate(rows).astype(bool)
+
+
+def mesh_gas_cut(scene, tubes: list[dict], meshes: list) -> tuple[GasCut | None, list[str]]:
+    """The meshes' cut of a scene's gas grid (None without gas or meshes), and the refusal of a cut
+    through which no gas can flow."""
+    if scene.gas is None or not meshes:
+        return None, []
+    solid, kinds, cut = gas_walls(gas_grid(scene), tubes, meshes)
+    if (kinds[2][:, :, 0] == INLET).any():
+        return cut, []
+    return cut, [f"meshes: the meshes close every inlet face of the gas grid, or every path from the inlet to the "
+                 f"outlet ({int(cut.unreachable.sum())} of {solid.size} gas cells sealed off), so no gas can flow: "
+                 "open the distributor under the meshes and a way up to the top, or make gas.cell_size fit the "
+                 "openings (a face is closed where a mesh cuts half of it)"]
+
+
+def shifted(gg: GasGrid, mask: np.ndarray, a: int, shift: int) -> np.ndarray:
+    """`mask` moved `shift` (+1 or -1) cells along axis a: wrapped on a periodic axis, False coming in
+    from an open side."""
+    out = np.roll(mask, shift, axis=a)
+    if not gg.periodic[a]:
+        edge = [slice(None)] * 3
+        edge[a] = 0 if shift == 1 else -1
+        out[tuple(edge)] = False
+    return out
+
+
+def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
+    """Per cell, the surface of a heated tube that the cell borders, for gas-tube convection:
+    wall_A [m^2] (the faces it shares with that tube's solid cells, scaled so that each tube's
+    cells add up to pi D L), wall_T [K], wall_D [m] and wall_k (tube index); None without a
+    heated tube."""
+    face_area = [gg.h[1] * gg.h[2], gg.h[0] * gg.h[2], gg.h[0] * gg.h[1]]
+    area = np.zeros(gg.cells)
+    out = {"wall_T": np.zeros(gg.cells), "wall_D": np.ones(gg.cells), "wall_k": np.zeros(gg.cells, np.int32)}
+    for k, t in enumerate(tubes):
+        if t["T"] is None:
+            continue
+        inside = tube_cells(gg, t)
+        borders = np.zeros(gg.cells)
+        for a in range(3):
+            for shift in (1, -1):
+                borders += (shifted(gg, inside, a, shift) & ~inside) * face_area[a]
+        axis = int(np.flatnonzero(np.asarray(t["mask"]) == 0.0)[0])
+        true_area = 2 * np.pi * t["r"] * gg.cells[axis] * gg.h[axis]
+        mine = borders > 0
+        area[mine] += borders[mine] * true_area / borders.sum()
+        out["wall_T"][mine], out["wall_D"][mine], out["wall_k"][mine] = t["T"], 2 * t["r"], k
+    if not area.any():
+        return None
+    out["wall_A"] = area
+    return out
+
+
+def convection_walls(gg: GasGrid, tubes: list[dict], meshes: list, cut: GasCut | None) -> dict[str, np.ndarray] | None:
+    """`tube_walls`, and the heated meshes' wetted surface (`tidem.gas.mesh_convection`) in the cells
+    no tube borders: wall_k = len(tubes) + the mesh's index, wall_D its `convection_length`; a
+    mesh's area in the cells a tube (or an earlier mesh) holds goes to its other cells, so that each
+    mesh keeps its whole wetted area. None without a heated surface that the gas touches."""
+    out = tube_walls(gg, tubes)
+    heated = [k for k, m in enumerate(meshes) if m.temperature is not None]
+    if not heated or cut is None:
+        return out
+    if out is None:
+        out = {"wall_T": np.zeros(gg.cells), "wall_D": np.ones(gg.cells), "wall_k": np.zeros(gg.cells, np.int32),
+               "wall_A": np.zeros(gg.cells)}
+    clip = spans_period(gg, meshes)
+    first = np.cumsum([0] + [len(m.triangles) for m in meshes])
+    for k in heated:
+        m = meshes[k]
+        area = wetted_area(gg, cut, m.vertices[m.triangles], clip[first[k]:first[k + 1]],
+                           inward_sides(m.vertices, m.triangles))
+        free = (area > 0.0) & (out["wall_A"] == 0.0) & ~cut.unreachable
+        if not free.any():
+            continue
+        out["wall_A"][free] = area[free] * area.sum() / area[free].sum()
+        out["wall_T"][free], out["wall_D"][free], out["wall_k"][free] = m.temperature, m.convection_length, len(tubes) + k
+    return out if out["wall_A"].any() else None
+
+
+def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:
+    """Per face component: CLOSED, INTERIOR, INLET (bottom) or OUTLET (top)."""
+    kinds = []
+    for c in range(3):
+        shape = gg.face_shape(c)
+        kind = np.full(shape, INTERIOR, np.int32)
+        idx = np.indices(shape)
+        below = [idx[a] - (1 if a == c else 0) for a in range(3)]
+        above = [idx[a] for a in range(3)]
+        for cell in (below, above):
+            i = [np.mod(cell[a], gg.cells[a]) if gg.periodic[a] else np.clip(cell[a], 0, gg.cells[a] - 1)
+                 for a in range(3)]
+            kind[solid[i[0], i[1], i[2]] == 1] = CLOSED
+        if not gg.periodic[c]:
+            lo_face = kind[tuple(0 if a == c else slice(None) for a in range(3))]  # views
+            hi_face = kind[tuple(gg.cells[c] if a == c else slice(None) for a in range(3))]
+            if c == 2:
+                lo_face[lo_face != CLOSED] = INLET
+                hi_face[hi_face != CLOSED] = OUTLET
+            else:
+                lo_face[:] = CLOSED
+                hi_face[:] = CLOSED
+        kinds.append(kind)
+    return kinds
+
+
+def inlet_map(gg: GasGrid, gas) -> np.ndarray:
+    """Superficial inlet velocity [m/s] of each bottom face (nozzles override the background)."""
+    xc = gg.lo[0] + (np.arange(gg.cells[0]) + 0.5) * gg.h[0]
+    yc = gg.lo[1] + (np.arange(gg.cells[1]) + 0.5) * gg.h[1]
+    X, Y = np.meshgrid(xc, yc, indexing="ij")
+    u = np.full(X.shape, gas.inlet_velocity)
+    for nz in gas.nozzles:
+        inside = (X >= nz.x[0]) & (X <= nz.x[1])
+        if nz.y is not None:
+            inside &= (Y >= nz.y[0]) & (Y <= nz.y[1])
+        u[inside] = nz.velocity
+    return u
+
+
+def voidage_layers(model) -> int:
+    """Horizontal layers per gas cell for the voidage a grain sees (`kernels/gas_coupling.py`): about one
+    particle (parcel) diameter high, the Sauter mean of the scene's particles, at least 1; 1 with
+    `gas.voidage = "cell"`."""
+    return layers_for(model.scene, sauter_diameter(2.0 * model.radius))
+
+
+def sauter_diameter(d: np.ndarray, count: np.ndarray | float = 1.0) -> float:
+    """Sauter mean diameter [m] of `count` spheres of each diameter d: sum n d^3 / sum n d^2."""
+    return float((count * d**3).sum() / (count * d**2).sum())
+
+
+def layers_for(scene, d: float) -> int:
+    """`voidage_layers` for particles of diameter d [m]."""
+    if scene.gas.voidage == "cell":
+        return 1
+    return max(1, round(gas_grid(scene).h[2] / d))

@@ -1,0 +1,298 @@
+"""The gas phase of a run (built only when the scene has a `[gas]` table).
+
+`GasPhase` owns the gas grid's Taichi fields (see `kernels/gas_flow.py` for the equations and
+`kernels/gas_coupling.py` for the exchange with particles) and advances the gas by one step
+of `coupling_interval` DEM steps: deposit voidage and drag, predict, project (CG), correct,
+gas energy, then sample the new gas state at the particles. Stability limits it cannot
+meet (gas Courant number, a drag relaxation time or a gas-particle heat-exchange time
+m c / H_p shorter than the DEM step) raise `GasError` with the setting to change.
+
+Set-up beside it: the grid's cells, faces and tube walls (`tidem.gas.geometry`), its Taichi
+fields (`tidem.gas.fields`), and the refusals before the first step (`tidem.gas.limits`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import taichi as ti
+
+from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
+from tidem.kernels.field_copy import FieldCopier
+from tidem.kernels.gas_band import band_width
+from tidem.kernels.gas_coupling import make_coupling_kernels
+from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
+from tidem.kernels.gas_grid import CLOSED, INLET
+from tidem.kernels.species import make_species_kernel
+from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
+from tidem.gas.fields import allocate_gas_fields
+from tidem.gas.geometry import (convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter,
+                                 voidage_layers)
+from tidem.gas.limits import MAX_COURANT
+from tidem.gas.open_volume import open_volumes
+from tidem.runtime.phases import PhaseTimer, clock
+from tidem.gas.species import M_O2, o2_mass_fraction
+
+
+def probe_column(z: float) -> str:
+    """The time-series column of a pressure probe at height z [m], e.g. gas_pressure_z45mm_Pa."""
+    return f"gas_pressure_z{1000 * z:g}mm_Pa"
+
+
+class GasError(RuntimeError):
+    """The gas step cannot go on stably; the message names the setting to change."""
+
+
+def grain_sauter_diameter(model) -> float:
+    """Sauter mean diameter [m] of the scene's grains, sum d^3 / sum d^2 over every grain (a parcel
+    of coarse-graining factor k holds k^3 grains of its diameter / k): the length of the packed-bed
+    tube convection."""
+    k = np.ones_like(model.radius) if model.coarse_grain is None else model.coarse_grain
+    return sauter_diameter(2.0 * model.radius / k, k**3)
+
+
+class GasPhase:
+    """Gas fields and the gas step for one Solver."""
+
+    def __init__(self, model, S, fp, timer: PhaseTimer | None = None):
+        scene = model.scene
+        gas = scene.gas
+        self.gas = gas
+        self.timer = timer or PhaseTimer()
+        self.gg = gg = gas_grid(scene)
+        self.heat = model.features.heat
+        self.species = model.features.species
+        self.sources = bool(model.features.reactions)
+        self.interval = gas.coupling_interval
+        self.dt = gas.coupling_interval * model.dt
+        self.tol = max(gas.tolerance, 1e-5 if fp == ti.f32 else 0.0)
+        self.solid, self.kinds, self.cut = gas_walls(gg, model.tubes, model.meshes, model.gas_cut)
+        self.tubes = model.tubes
+        self.heated_meshes = [k for k, m in enumerate(model.meshes) if m.temperature is not None]
+        self.inlet = inlet_map(gg, gas)
+        walls = convection_walls(gg, model.tubes, model.meshes, self.cut) \
+            if self.heat and gas.tube_convection != "none" else None
+        self.walls = walls is not None
+        self.layers = voidage_layers(model)
+        self.open = open_volumes(gg, self.solid, self.kinds, model.tubes, self.cut, self.layers)
+        self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
+        n_walls = len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0)  # wall_k of mesh k: tubes + k
+        self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, n_walls, self.heat,
+                                                 self.sources, self.species, self.open, self.layers, self.band,
+                                                 self.cut)
+        G = self.G
+        host = {"p": G.p, "gp2": G.gp[2], "eps": G.eps, **{f"u{c}": G.u[c] for c in range(3)}}
+        host.update({name: getattr(G, name) for name, on in (("T", self.heat), ("Y", self.species),
+                                                              ("wall_rate", self.walls)) if on})
+        self._host = FieldCopier(host)  # what samples and snapshots read, in one launch (`kernels/field_copy.py`)
+        k_gas = scene.heat.gas_conductivity if self.heat else 0.026
+        self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
+        wall_grain, wall_umf = 0.0, 0.0
+        if self.walls and gas.tube_convection == "martin_nilles":
+            wall_grain = grain_sauter_diameter(model)
+            rho_p = float((model.mass).sum() / (4.0 / 3.0 * math.pi * model.radius**3).sum())
+            g = float(np.linalg.norm(model.gravity))  # no gravity: nothing fluidizes, no cap
+            wall_umf = wen_yu_minimum_fluidization(wall_grain, rho_p, gas.density, gas.viscosity, g) if g > 0 else 1e30
+        self.flow = make_flow_kernels(gg, G, gas.density, gas.viscosity, model.gravity, self.heat,
+                                      gas.density * gas.heat_capacity, self.walls, k_gas,
+                                      gas.heat_capacity * gas.viscosity / k_gas, self.sources,
+                                      self.heat and gas.conduction, wall_grain, wall_umf, self.band,
+                                      self.open is not None, self.cut is not None)
+        self.serial_solve = serial_solve(self.solid.size)  # as make_flow_kernels decided
+        self.cg_batch = cg_batch()
+        self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
+            gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
+            NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
+            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, self.open is not None,
+            self.layers)
+        if self.species:
+            ox = gas.oxygen
+            self._species = make_species_kernel(gg, G, self.flow, gas.density, ox.diffusivity)
+            self.y_in = o2_mass_fraction(ox.mole_fraction, ox.molar_mass)
+            x0 = ox.mole_fraction if ox.initial_mole_fraction is None else ox.initial_mole_fraction
+            G.Y.fill(o2_mass_fraction(x0, ox.molar_mass))
+        if self.heat:
+            T0 = gas.initial_temperature or scene.heat.initial_temperature
+            G.T.fill(T0)
+        self.n = model.capacity
+        self.iterations = 0
+        self.residual = 0.0
+        self.divergence = 0.0
+        self.steps = 0
+        self.set_inlet(0.0)
+        self._deposit(self.n)
+        G.eps_old.copy_from(G.eps)
+        # start from the inlet flow (at its ramped value) spread over the bed
+        uz = np.where(self.kinds[2] == CLOSED, 0.0, gas.inlet_velocity * self.inlet_scale)
+        G.u[2].from_numpy(uz)
+
+    def set_inlet(self, t: float) -> None:
+        ramp = self.gas.inlet_ramp
+        scale = min(t / ramp, 1.0) if ramp > 0 else 1.0
+        self.G.inlet.from_numpy(self.inlet * scale)
+        self.inlet_scale = scale
+
+    def step(self, t: float) -> None:
+        """One gas step ending at time t (particles at their current positions and velocities)."""
+        dt = self.dt
+        f = self.flow
+        lap = self.timer.lap
+        start = clock()
+        if self.inlet_scale < 1.0:  # ramping up
+            self.set_inlet(t)
+        self._deposit(self.n)
+        rate = self._couple(self.n)
+        start = lap("gas coupling", start)
+        if rate * dt / self.interval > 1.0:
+            raise GasError(
+                f"the drag relaxation time of the lightest particle ({1.0 / rate:.3g} s) is shorter than the DEM step "
+                f"({dt / self.interval:.3g} s): lower numerics.dt (or dt_fraction), or use larger particles")
+        if self.heat:
+            heat_rate = float(self.G.heat_rate[0])
+            if heat_rate * dt / self.interval > 1.0:
+                raise GasError(
+                    f"the gas-particle heat-exchange time m c / (h pi d^2) of the fastest particle ({1.0 / heat_rate:.3g} s) "
+                    f"is shorter than the DEM step ({dt / self.interval:.3g} s), so the explicit particle temperature "
+                    "update would overshoot: lower numerics.dt (or dt_fraction), or raise the particles' heat capacity")
+        f["predict"](dt)
+        start = lap("gas flow", start)
+        self._project(dt)
+        start = lap("pressure solve", start)
+        f["correct"]()
+        courant = f["courant"](dt)
+        if courant > MAX_COURANT:
+            fix = (f"lower gas.coupling_interval (now {self.interval})" if self.interval > 1
+                   else "lower numerics.dt (or dt_fraction)")
+            raise GasError(
+                f"gas Courant number {courant:.2f} exceeds {MAX_COURANT} at t = {t:.6g} s (gas step {dt:.3g} s): {fix}")
+        if self.heat:
+            f["energy"](dt, self.t_in)
+        if self.species:
+            self._species(dt, self.y_in)
+            if self.G.bsum[2] < 0.0:
+                Y = self.G.Y.to_numpy()
+                worst = np.unravel_index(np.argmin(Y), Y.shape)
+                at = ", ".join(f"{v:.4g}" for v in self.gg.center(worst))
+                raise GasError(
+                    f"the particles took more O2 from a gas cell than it held within one gas step at t = {t:.6g} s "
+                    f"(the cell centred at ({at}) m, O2 mass fraction {Y[worst]:.3g} after the step): "
+                    f"lower gas.coupling_interval (now {self.interval}) or numerics.dt")
+        self.divergence = f["divergence"](dt)
+        start = lap("gas flow", start)
+        self._sample(self.n)
+        lap("gas coupling", start)
+        self.steps += 1
+
+    def _project(self, dt: float) -> None:
+        """Solve for p directly on thin grids (banded Cholesky, `kernels/gas_band.py`; 0 iterations), else by
+        Jacobi-preconditioned CG (`kernels/gas_flow.py`), also where the direct solve finds the system singular."""
+        f, G = self.flow, self.G
+        bb = f["assemble"](dt)
+        u_scale = max(float(np.abs(self.inlet).max()) * self.inlet_scale, 1e-3)
+        scale = max(math.sqrt(bb), u_scale / min(self.gg.h) * math.sqrt(self.solid.size))
+        if self.band:
+            rr = f["band_solve"]()
+            if rr >= 0.0:
+                self._finish(0, math.sqrt(rr) / scale)
+                return
+            self.band = 0  # singular (a fluid region without an outlet): the CG from now on
+        if self.serial_solve:
+            it = f["cg_serial"](self.gas.max_iterations, self.tol * scale)
+            self._finish(it, math.sqrt(max(float(G.sums[RR]), 0.0)) / scale)
+            return
+        f["cg_start"]()
+        it, rr = 0, 0.0
+        while it < self.gas.max_iterations:
+            rr = f["cg_iterate"]()
+            it += self.cg_batch
+            if math.sqrt(max(rr, 0.0)) <= self.tol * scale:
+                break
+        self._finish(it, math.sqrt(max(rr, 0.0)) / scale)
+
+    def _finish(self, it: int, residual: float) -> None:
+        self.iterations = it
+        self.residual = residual
+        if residual > 10 * self.tol and it >= self.gas.max_iterations:
+            raise GasError(
+                f"the pressure solve did not converge in {it} iterations (relative residual {self.residual:.2e}, "
+                f"tolerance {self.tol:.0e}): raise gas.max_iterations or gas.tolerance")
+
+    def host_fields(self) -> dict[str, np.ndarray]:
+        """Pressure, its z gradient (gp2), voidage, face velocities (u0, u1, u2) and where solved the
+        temperature (T), O2 mass fraction (Y) and the tubes' heat flows (wall_rate), read together."""
+        return self._host.read()
+
+    def pressure_drop(self, host: dict | None = None) -> float:
+        """Mean pressure on the inlet faces [Pa] (p = 0 at the outlet), fluid cells only (from `host`,
+        `host_fields()`, where given)."""
+        host = host or self.host_fields()
+        p = host["p"][:, :, 0]
+        gp = host["gp2"][:, :, 0]
+        open_ = self.kinds[2][:, :, 0] == INLET
+        if not open_.any():
+            return 0.0
+        face = p - 0.5 * self.gg.h[2] * gp
+        return float(face[open_].mean())
+
+    def probe_pressures(self, host: dict) -> dict[str, float]:
+        """{probe_column(z): pressure [Pa]} of each height z in gas.pressure_probes: the mean over the
+        fluid cells of a horizontal layer, interpolated linearly between the two layers whose centres
+        bracket z (the lowest or highest layer beyond them); gauge, p = 0 at the outlet (`host`: `host_fields()`)."""
+        if not self.gas.pressure_probes:
+            return {}
+        fluid = self.solid == 0
+        count = fluid.sum(axis=(0, 1))
+        total = np.where(fluid, host["p"], 0.0).sum(axis=(0, 1))
+        means = np.divide(total, count, out=np.full(len(count), np.nan), where=count > 0)
+        centres = self.gg.lo[2] + (np.arange(self.gg.cells[2]) + 0.5) * self.gg.h[2]
+        return {probe_column(z): float(np.interp(z, centres, means)) for z in self.gas.pressure_probes}
+
+    def summary(self) -> dict:
+        host = self.host_fields()
+        out = dict(gas_pressure_drop_Pa=self.pressure_drop(host), gas_cg_iterations=self.iterations,
+                   gas_residual=self.residual, gas_divergence_per_s=self.divergence)
+        out.update(self.probe_pressures(host))
+        if self.heat:
+            T = host["T"][self.solid == 0]
+            out["gas_T_mean_K"] = float(T.mean())
+        if self.walls:
+            rate = host["wall_rate"]
+            for k, tube in enumerate(self.tubes):
+                if tube["T"] is not None:
+                    out[f"tubes{k}_gas_heat_W"] = float(rate[k])
+            for k in self.heated_meshes:
+                out[f"meshes{k}_gas_heat_W"] = float(rate[len(self.tubes) + k])
+        return out
+
+    def cell_fields(self) -> dict[str, np.ndarray]:
+        """The gas state per cell for snapshots (`gas/*.vti`): voidage, pressure [Pa],
+        velocity at the cell centre [m/s] (mean of the two faces), with heat the temperature
+        [K], with O2 transport its mole fraction, and `solid` (1 inside a tube)."""
+        host = self.host_fields()
+        out = {"voidage": host["eps"], "pressure": host["p"]}
+        centre = []
+        for c in range(3):
+            u = host[f"u{c}"]
+            if u.shape[c] == self.gg.cells[c]:  # periodic: the last face is the first
+                u = np.concatenate([u, np.take(u, [0], axis=c)], axis=c)
+            lo = np.take(u, range(self.gg.cells[c]), axis=c)
+            hi = np.take(u, range(1, self.gg.cells[c] + 1), axis=c)
+            centre.append(0.5 * (lo + hi))
+        out["velocity"] = np.stack(centre, axis=-1)
+        if self.heat:
+            out["temperature"] = host["T"]
+        if self.species:
+            out["o2_mole_fraction"] = host["Y"] * self.gas.oxygen.molar_mass / M_O2
+        out["solid"] = self.solid.astype(np.int32)
+        return out
+
+    def mean_o2_mole_fraction(self) -> float:
+        """Mean O2 mole fraction over the fluid cells."""
+        y = self.host_fields()["Y"][self.solid == 0]
+        return float(y.mean() * self.gas.oxygen.molar_mass / M_O2)
+
+    def release(self) -> None:
+        if self._tree is not None:
+            self._tree.destroy()
+            self._tree = None

@@ -1,0 +1,77 @@
+"""What `tidem check` prints beyond the model's own numbers: the gas grid and how its pressure is
+solved, the heated meshes' gas convection, and notes on settings a run would not honour as asked
+(a gas grid too coarse for the bed, more snapshots than steps, an interval past t_end, a very long
+run)."""
+
+import math
+
+from tidem.gas.geometry import convection_walls, gas_grid, voidage_layers
+from tidem.kernels.gas_band import band_width
+from tidem.runner.output_size import cadence
+
+LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
+
+
+def mesh_convection_lines(model) -> list[str]:
+    """`tidem check`'s line per heated mesh that gives heat to the gas: the surface it shows the gas
+    (`tidem.gas.mesh_convection`) against its area, and the cells that take it."""
+    if model.scene.gas.tube_convection == "none" or model.gas_cut is None:
+        return []
+    walls = convection_walls(gas_grid(model.scene), model.tubes, model.meshes, model.gas_cut)
+    lines = []
+    for k, m in enumerate(model.meshes):
+        if m.temperature is None:
+            continue
+        mine = (walls["wall_k"] == len(model.tubes) + k) & (walls["wall_A"] > 0) if walls is not None else False
+        shown = float(walls["wall_A"][mine].sum()) if walls is not None else 0.0
+        if shown == 0.0:
+            lines.append(f"note: {m.name} gives the gas no heat: its surface lies in no gas cell of its own (cells "
+                         "beside a heated tube are the tube's, and sealed cells have no gas)")
+            continue
+        lines.append(f"{m.name}: gives heat to the gas ({model.scene.gas.tube_convection}, length "
+                     f"{m.convection_length:g} m) over {shown:.4g} m^2 in {int(mine.sum())} "
+                     f"cells, {shown / m.stats['area']:.2f} x its area (1: a closed body, 2: a sheet in the gas)")
+    return lines
+
+
+def output_notes(model, snapshots: int) -> list[str]:
+    """`tidem check`'s notes on output that will not be what the scene asks (at most one snapshot a step;
+    an interval beyond t_end) and on a run of more than LONG_RUN steps."""
+    out = model.scene.output
+    steps = math.ceil(model.t_end / model.dt)
+    asked = math.floor(model.t_end / cadence(model.scene, model.t_end)[0] + 1e-9)
+    notes = []
+    if asked > steps:
+        notes.append(f"note: {asked} snapshots asked for, but a run writes at most one a step: {snapshots} in "
+                     f"{steps} steps")
+    if out.interval is not None and out.interval > model.t_end:
+        notes.append(f"note: output.interval ({out.interval:g} s) is longer than t_end ({model.t_end:g} s): only "
+                     "the snapshot at t = 0 is written (the final state is in checkpoint.npz)")
+    if steps > LONG_RUN:
+        notes.append(f"note: {steps:.3g} steps to t_end: at 1e7 particle-steps/s (2 CPU cores) about "
+                     f"{steps * model.capacity / 1e7 / 86400:.3g} days; check numerics.dt and numerics.t_end")
+    return notes
+
+
+def gas_notes(model) -> list[str]:
+    """`tidem check`'s notes on a gas grid too coarse to resolve the bed: fewer than 3 cells up, or one
+    cell across a walled axis."""
+    gg = gas_grid(model.scene)
+    size = model.scene.gas.cell_size
+    notes = [f"note: the gas grid has {gg.cells[2]} cell(s) up, so it does not resolve the bed's height; a smaller "
+             f"gas.cell_size (now {size:g} m)"] if gg.cells[2] < 3 else []
+    notes += [f"note: the gas grid has one cell across {'xy'[a]} between walls, so the gas flow does not resolve "
+              f"it; a smaller gas.cell_size (now {size:g} m)" for a in range(2) if gg.cells[a] == 1 and not gg.periodic[a]]
+    return notes
+
+
+def gas_line(model) -> str:
+    """`tidem check`'s line on the gas grid, the voidage its grains see and how the pressure is solved."""
+    gas = model.scene.gas
+    gg = gas_grid(model.scene)
+    layers = voidage_layers(model)
+    width = band_width(gg, cpu=True)
+    cg = f"Jacobi-preconditioned CG (tolerance {gas.tolerance:g}, at most {gas.max_iterations} iterations)"
+    solve = (f"directly on the CPU (banded Cholesky, half-bandwidth {width} cells), by {cg} on a GPU" if width else f"by {cg}")
+    return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
+            f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + f"; pressure solved {solve}")
