@@ -11,7 +11,7 @@ w_i = 1 inside, 0 outside), with atomic adds into float64 accumulators, and coun
 Channels c: COUNT (N), VOLUME (sum V_i), VOL_V (3, sum V_i v_i), NUM_V (3, sum v_i) and, with
 heat, VOL_T (sum V_i T_i). The fields of eq. 34 (Q = (1/V) sum w_i V_i Q_i: packing fraction
 with Q_i = 1, solid flux with Q_i = v_i) and eq. 35 (number mean Q = (1/N) sum w_i Q_i of the
-velocity) follow from these sums divided by the number of samples (`tidem/averaging.py`). In
+velocity) follow from these sums divided by the number of samples (`tidem/results/averaging.py`). In
 the cells the velocity components are (x, y, z); in the ring sectors (radial outwards,
 tangential towards increasing omega, along the tube axis). Tube offsets use the periodic
 minimum image.

@@ -70,9 +70,9 @@ def make_neighbor_builder(grid, K: int, skin: float, rolling: bool, hysteretic: 
     slabs (`S.slab`, `S.slab_list`, `S.slab_start`) and moves the contact history (steps 1-4, and the
     Taichi funcs f(i) in `after` on each particle in step 4's loop, in one kernel launch). `cell_order`
     writes the particles in cell order to `S.sorted_idx[0:n]` (step 1's counting sort, the inactive
-    ones after the active, in any order): a storage sort's order on a GPU (`tidem.storage_order`).
+    ones after the active, in any order): a storage sort's order on a GPU (`tidem.particles.storage_order`).
 
-    S: a namespace of Taichi fields (see `tidem.state.State`). With `growth` (particles that
+    S: a namespace of Taichi fields (see `tidem.sim.state.State`). With `growth` (particles that
     grow) each row also records the particle's radius at the build, `S.r_build`. `uniform`: (radius, mass)
     of every particle (`kernels/sizes.py`), or None. `slab_lists`: whether the contact passes sweep
     slab lists (`kernels/contact.py`; None: on the CPU, where they do); without, the serial pass that

@@ -1,5 +1,5 @@
 """A parallel loop that keeps every CPU worker of Taichi's thread pool busy for some milliseconds
-(`tidem.thread_binding` tells the workers from Taichi's other threads by it)."""
+(`tidem.runtime.thread_binding` tells the workers from Taichi's other threads by it)."""
 
 import taichi as ti
 

@@ -91,7 +91,7 @@ def make_force_kernel(grid, law: int, rolling: bool, planes: list[dict], tubes: 
     m evaluates it every m-th step, an explicit Euler step of m dt), and `conduct` = 0 skips it (q[i] =
     0; the surfaces' heat flows of the last evaluation hold); S.conduct[None] tells the kick. `diag` = 1
     also fills ovl and ncontact (module docstring).
-    `planes` and `tubes` (`tidem.surfaces`) are compiled in as constants. `one_material`: where all particles
+    `planes` and `tubes` (`tidem.walls.surfaces`) are compiled in as constants. `one_material`: where all particles
     are of one material, its material-pair parameter vector and its material-surface vector for each
     surface, and `uniform`: (radius, mass) where all have the same; the pair loop then takes them as
     constants of the kernel instead of loading them for every pair (12 % of the passes of the peer

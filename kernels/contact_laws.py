@@ -6,7 +6,7 @@ particle-tube contacts use the same code (`make_contact_response`):
 * geometry: unit normal `n` pointing from particle i to the other body, overlap `delta` > 0,
   relative velocity of i's contact point against the other's `v_rel`, relative spin `w_rel`,
   effective mass `m_eff`, effective radius `r_eff`, the two diameters (linear laws);
-* a parameter vector `p` (indices below) from the material-pair table built by `tidem.contact_params`;
+* a parameter vector `p` (indices below) from the material-pair table built by `tidem.particles.contact_params`;
 * history: tangential spring `xi` [m], rolling spring moment `mr` [N m], maximum overlap
   `dmax` [m] (hysteresis), each returned updated.
 
@@ -21,7 +21,7 @@ Normal laws (F_n > 0 is repulsive):
   as in LIGGGHTS' hertz model).
 * linear hysteresis of Walton & Braun (source 3 eq. 26-28): loading with k_l, unloading and
   reloading with k_ul along F = k_ul (delta - delta_0), delta_0 = delta_max (1 - k_l/k_ul);
-  no attraction, floor 0.001 k_l delta. Without the floor e = sqrt(k_l/k_ul); `tidem.contact_params`
+  no attraction, floor 0.001 k_l delta. Without the floor e = sqrt(k_l/k_ul); `tidem.particles.contact_params`
   picks k_ul so that the restitution *with* the floor is e.
 
 Tangential (source 3 eq. 29; Cundall-Strack spring with history): the spring `xi` is rotated

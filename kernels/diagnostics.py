@@ -24,7 +24,7 @@ def make_energy_kernel(gravity, S):
     active]; `sample`, a time-series row's reductions in the same pass over the particles, also sets
     S.worst to the largest overlap ratio and S.worst_at[0] to the first active particle with a
     non-finite position (n if none), as the health check's first loop does (`make_health_kernel`):
-    one loop and one read of the tallies a sample instead of three loops and two reads (`tidem.solver`).
+    one loop and one read of the tallies a sample instead of three loops and two reads (`tidem.sim.solver`).
     S.worst_at[1] (the particle of the largest overlap) is left as it was."""
     g = ti.Vector(list(gravity))
 
@@ -89,7 +89,7 @@ def make_health_kernel(S):
 
 
 def make_sample_kernel(S, P, z_lo: float, z_bin: float, bins: int, heat: bool):
-    """Return `sample_stats(n)` for a GPU's time series (`tidem.particle_stats`): P.z_hist[b] = the
+    """Return `sample_stats(n)` for a GPU's time series (`tidem.results.particle_stats`): P.z_hist[b] = the
     active particles whose centre height z lies in bin b (width z_bin from z_lo; heights beyond
     count in the end bins), and with `heat` P.T_sum[None] = sum of their temperatures,
     P.T_top[None] = the largest, P.T_low[None] = minus the smallest (both raised by `raise_max`).

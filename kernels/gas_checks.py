@@ -1,5 +1,5 @@
 """The gas step's checks after the velocity correction (`kernels/gas_flow.py`): the continuity residual
-and the Courant number the gas energy and species advection are held to (`tidem.gas`, `tidem.gas_limits`)."""
+and the Courant number the gas energy and species advection are held to (`tidem.gas.phase`, `tidem.gas.limits`)."""
 
 import taichi as ti
 

@@ -2,7 +2,7 @@
 
 At each gas step (every `coupling_interval` DEM steps):
   deposit_volume: eps_c = 1 - sum_p w_pc V_p / (f_c V_cell) (cloud-in-cell, `gas_grid.make_cic`;
-                  f_c the open fraction of a cell a mesh cuts, `tidem.gas_mesh`, else 1),
+                  f_c the open fraction of a cell a mesh cuts, `tidem.gas.mesh`, else 1),
                   clipped below at `min_voidage`. With `layers` = m > 1 the solid volume is also
                   deposited on layers m times thinner than a cell (about one grain high;
                   same cells across), for the voidage a grain sees (below).
@@ -48,7 +48,7 @@ from .gas_grid import layer_grid, make_cic, serial_loops
 from .gas_weights import make_gas_weights, make_in_gas, plain_weights
 from .ordered import in_order
 
-MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas_limits`)
+MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas.limits`)
 
 
 def make_self_share(corner):

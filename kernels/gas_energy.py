@@ -5,7 +5,7 @@ Gas energy (finite volume, particle exchange implicit, so stable for any exchang
       = HT - H T^{n+1} + H_w (T_w - T^{n+1}) + k_g sum_f eps_f A_f (T_nb - T^n) / h_f,
 the last term Fourier conduction through the gas across interior faces (explicit, with
 `conduction`; none through walls, inlet or outlet; it needs alpha_g dt sum 1/h^2 within the
-limit `tidem.gas_limits.gas_step_checks` enforces),
+limit `tidem.gas.limits.gas_step_checks` enforces),
 T_f on interior faces the MUSCL value T_up + phi(r) (T_up - T_far) / 2 with van Leer's limiter
 phi(r) = (r + |r|)/(1 + |r|), r = (T_down - T_up)/(T_up - T_far) (van Leer 1979; total
 variation diminishing for Courant numbers up to 0.5, the limit the gas step enforces); T_far

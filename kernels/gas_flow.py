@@ -21,7 +21,7 @@ Boundaries: inlet faces at the bottom carry a set superficial velocity (eps_f u_
 the top is a pressure outlet (p = 0 on the face); other box sides and faces of solid cells
 (cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
 periodic axes wrap.
-Cut faces (meshes in the gas, `tidem.gas_apertures`): a face open over the share a_f of its area
+Cut faces (meshes in the gas, `tidem.gas.apertures`): a face open over the share a_f of its area
 carries the flux a_f eps_f u_f, u_f the gas velocity in its open part, and a cell whose gas part
 is the share f of it holds f V of gas, so that the pressure equation reads
     sum_f a_f eps_f A_f (p_nb - p) / h^2 = f d(eps)/dt + sum_f +- a_f eps_f u*_f / h,
@@ -42,7 +42,7 @@ from .ordered import in_order
 
 SERIAL_CELLS = 50_000  # grids up to this size solve the pressure in one thread (measured faster, deterministic)
 # The CG keeps its scalars in G.sums (RZ = r.z, DQ = d.q, RZ_NEW = the next r.z, RR = r.r), so that the
-# host launches iterations without reading anything back (`tidem.gas`, _project).
+# host launches iterations without reading anything back (`tidem.gas.phase`, _project).
 RZ, DQ, RZ_NEW, RR = range(4)
 GPU_BATCH = 8  # parallel CG iterations per launch on a GPU (`cg_batch`)
 
@@ -66,16 +66,16 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                       tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
                       conduction: bool = False, wall_grain: float = 0.0,
                       wall_umf: float = 0.0, band: int = 0, open_faces: bool = False, cut_faces: bool = False):
-    """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas_fields`); `tube_walls`
+    """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas.fields`); `tube_walls`
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy;
     with `wall_grain` > 0, the grains' diameter, the packed-bed term in the particle-filled share, its
     velocity capped at `wall_umf`),
     `sources` the heat of particles that reacted away (Qs) and the boundary enthalpy sum (bsum),
     `conduction` Fourier conduction through the gas; `band` > 0 (`gas_band.band_width`) adds the direct
     pressure solve band_solve (fields band, band_y). With `open_faces` (tubes or meshes in the gas) a face's drag
-    B_f, Bv_f acts over its open volume, G.open_face[c] times the face's volume (`tidem.gas_open_volume`). With
+    B_f, Bv_f acts over its open volume, G.open_face[c] times the face's volume (`tidem.gas.open_volume`). With
     `cut_faces` (meshes in the gas) each face carries its aperture G.aperture[c] and each cell its gas part's
-    share G.part of its volume (`tidem.gas_apertures`): the fluxes a_f S_f (eps u)_f and the volume f V."""
+    share G.part of its volume (`tidem.gas.apertures`): the fluxes a_f S_f (eps u)_f and the volume f V."""
     cic, corner, weight, corners = make_cic(gg)
     n = gg.cells
     small = serial_solve(n[0] * n[1] * n[2])

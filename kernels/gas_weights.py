@@ -10,7 +10,7 @@ and heat all reach the gas and what it reads is the gas's. A wall's own face, wh
 the gas, stays a point: the gas's normal velocity there is zero, as on the box's own walls (which are
 treated as before). Where every point of the cube counts the weights are the plain ones, to the bit;
 where none does (a grain sealed off with its cell) the plain ones too. The open volume the voidage and
-drag are then taken over is `tidem.gas_open_volume`'s (docs/design/near_wall_weights.md).
+drag are then taken over is `tidem.gas.open_volume`'s (docs/design/near_wall_weights.md).
 """
 
 import taichi as ti

@@ -82,7 +82,7 @@ ACROSS_MIN = 16  # cells across gravity that make eight blocks of two slabs (`ke
 def slab_axis_for(cells, gravity) -> int:
     """The axis to cut into slabs: the one with the most cells across gravity (a bed is about as
     dense everywhere across it, while along gravity it may fill the lower part only; and where it is
-    x, each slab is one stretch of storage, which `tidem.storage_order` sorts x, then y, then z), unless
+    x, each slab is one stretch of storage, which `tidem.particles.storage_order` sorts x, then y, then z), unless
     that has fewer than ACROSS_MIN cells and the axis along gravity more (a tall, narrow column).
     Slabs along gravity cut through the storage order: the bubbling and moving beds ran 1.2-1.4x
     faster with slabs across it (`benchmarks/README.md`, twelfth sitting)."""
@@ -93,13 +93,13 @@ def slab_axis_for(cells, gravity) -> int:
 
 def slab_layout(grid: Grid) -> tuple[int, int]:
     """(axis, count) of the slabs that the contact pass sweeps (`kernels/contact.py`): one slab per
-    layer of cells along the grid's slab axis, whose cell count `tidem.model.neighbour_grid` makes
+    layer of cells along the grid's slab axis, whose cell count `tidem.sim.model.neighbour_grid` makes
     even (or one or two). A slab is a cell wide, so a listed pair's particles lie in the same slab
     or in neighbouring ones. The layout depends on the grid only (never on the thread count), so the
     sums, and a float64 run, are the same on any number of threads."""
     cells = grid.cells[grid.slab_axis]
     if cells > 2 and cells % 2:
-        raise ValueError(f"slab axis of {cells} cells: the passes need an even count (tidem.model.neighbour_grid)")
+        raise ValueError(f"slab axis of {cells} cells: the passes need an even count (tidem.sim.model.neighbour_grid)")
     return grid.slab_axis, cells
 
 

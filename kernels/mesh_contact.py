@@ -3,12 +3,12 @@ history, and the same contact law and wall heat transfer as planes and tubes.
 
 Triangles live in fields (`tri_v` [T, 3] vertices now, `tri_mesh` [T] the mesh each belongs to);
 a mesh that crosses a periodic boundary also holds shifted copies of the triangles near it, so
-that a surface continues seamlessly across the boundary (`tidem.mesh_bins`).
+that a surface continues seamlessly across the boundary (`tidem.walls.mesh_bins`).
 
 Broad phase. At each neighbour build every particle lists the triangles within r_i + `reach`
 (skin plus the gas lens' reach) of its centre, `mc_tri[i, :mc_n[i]]`, from the triangles binned
-into the neighbour grid's cells (`mbin_start`, `mbin_tri`; binned on the host, `tidem.mesh_bins`).
-Until the next build no particle moves more than half the skin and (`tidem.solver`) no mesh more
+into the neighbour grid's cells (`mbin_start`, `mbin_tri`; binned on the host, `tidem.walls.mesh_bins`).
+Until the next build no particle moves more than half the skin and (`tidem.sim.solver`) no mesh more
 than half the skin, so no unlisted triangle can touch. More than `M` triangles in reach count in
 overflow[3] (an error for the run).
 
@@ -24,7 +24,7 @@ the triangles around lie on a nearer one); at a concave edge each face's closest
 its own face only, so both act. A face contact's normal is the face normal (exact for a plane
 made of triangles: the same bits as the analytic plane), an edge or vertex contact's the line
 from x to p. Flat patches: where every triangle a particle lists lies in one plane patch (joined
-by flat shared edges, `tidem.mesh_geometry.flat_patches`) and x lies over the face of one of them,
+by flat shared edges, `tidem.walls.mesh_geometry.flat_patches`) and x lies over the face of one of them,
 that face is the nearest point of the patch and every other listed triangle's contact would be
 suppressed, so the particle touches that face alone without testing the others; it tries first
 the triangle whose face it was over last (a floor of fine triangles costs about one nearest-point

@@ -42,7 +42,7 @@ def make_pair_contacts(S, respond, hysteretic: bool, rolling: bool, p_one, heat:
     cg = float(grain_scale)
     fp = ti.lang.impl.current_cfg().default_fp
     K = S.nbr.shape[1]
-    hist = S.ft.dtype  # float32 with numerics.precision = 'mixed' (tidem.state), else fp
+    hist = S.ft.dtype  # float32 with numerics.precision = 'mixed' (tidem.sim.state), else fp
     single = p_one is not None
 
     @ti.func

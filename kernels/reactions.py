@@ -14,7 +14,7 @@ Field 1969, Combust. Flame 13, 237: k_s = 8710 exp(-17967 K / T_p) g/(cm^2 s atm
   read every step. The particle loses dm = min(m_dot dt, m); the cells lose nu M_O2/M_C dm of O2,
   each the share w_c Y_c / sum w_c Y_c (`o2_sink`, taken at the next gas step): m_dot is linear in
   Y, so each cell gives what its own O2 drives and a cell without O2 gives none. The particle gets
-  dm h_c (h_c the heat per kg C of tidem.reactions). `shrink` keeps the density (d ~ m^1/3),
+  dm h_c (h_c the heat per kg C of tidem.heat.reactions). `shrink` keeps the density (d ~ m^1/3),
   `density` keeps the diameter. A particle whose carbon is gone is removed.
 Polymerization (source 1, Kaneko et al. 1999): q = k_p p_M exp(-E/R (1/T - 1/T_ref)) m dH_p [W],
   first order in the monomer partial pressure p_M. With `growth` the polymer made stays on the
@@ -44,7 +44,7 @@ gas step). What particles give their gas cells (the O2 a char particle takes, a 
 heat) is booked per particle (`gas_book`) in the parallel loop and added to the cells after it, in
 particle order: the same sums, bit for bit, on any thread count; so are the totals of S.rsum on the
 CPU (each particle's share booked in its row of `rbook`, added up in particle order after the loop).
-Per-step stability (share of the mass used in one step) is refused at set-up (tidem.reactions); the
+Per-step stability (share of the mass used in one step) is refused at set-up (tidem.heat.reactions); the
 last step of a particle's life is clamped to what it has left.
 """
 
@@ -71,7 +71,7 @@ def booked_slots(kinds) -> list[int]:
 
 def make_reaction_kernel(reactions: list[dict], S, gg=None, G=None, rho_g: float = 1.0, mu: float = 1.0,
                          W: int = 1):
-    """Return `react(n, t, dt, steps_left)` for the reactions of `tidem.reactions.reaction_constants`
+    """Return `react(n, t, dt, steps_left)` for the reactions of `tidem.heat.reactions.reaction_constants`
     (a kernel), and `in_kick` where no reaction removes a particle (polymerization): the Taichi funcs
     particle(i, t, dt, steps_left), which the kick calls on each reacting particle after its forces are
     complete, and hand_over(n), which the kick's kernel calls after its particle loop, so that the

@@ -1,5 +1,5 @@
 """Particle radius and mass as the kernels read them: loaded per particle, or, where all particles
-have the same (`tidem.model.Model.uniform_particles`), constants of the kernel, which then loads
+have the same (`tidem.sim.model.Model.uniform_particles`), constants of the kernel, which then loads
 nothing and folds the products of constants (the contact law's m* and R*, the list's reach)."""
 
 import taichi as ti

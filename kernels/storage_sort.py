@@ -3,14 +3,14 @@ without a copy through the host.
 
 On a GPU the order is the broad phase's cell order (`kernels/broadphase.py` `cell_order`), whose ties
 the counting sort's atomics decide: runs there are not bit-reproducible anyway (`kernels/ordered.py`).
-On the CPU the host computes the order (`tidem.storage_order`: a stable numpy sort, so that float64
+On the CPU the host computes the order (`tidem.particles.storage_order`: a stable numpy sort, so that float64
 runs stay bit-identical) and this kernel moves the fields: copying every field to the host and back
 took 25 ms a sort of fluidized_tube's 13 000 grains, most of it a launch per field and direction,
 and on a GPU about 1 kB a particle crossed the bus (0.7 GB for the 700 000-grain laboratory bed).
 Each field is gathered into a scratch twin, field[order[k]] -> twin[k], and copied back, all fields
 in one loop each way; partner indices in the Verlet rows are renumbered (renumber[order[k]] = k; a
 slot past the row's length holds -1), each row keeping its order and history (steps 2-3 of
-`tidem.storage_order`).
+`tidem.particles.storage_order`).
 """
 
 import taichi as ti

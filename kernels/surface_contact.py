@@ -4,7 +4,7 @@ surface (`kernels/contact_laws.py`, `kernels/heat.py`).
 
 Walls are planes p(t) = p0 + u (t - t0) clipped to [t0, t1] (a moving bottom plate is a plane with a
 velocity); tubes are infinite cylinders along x or y (`tube_mask` zeroes the axis component). Their
-geometry is constant (`tidem.surfaces`), compiled into the kernel: an axis-aligned wall costs one
+geometry is constant (`tidem.walls.surfaces`), compiled into the kernel: an axis-aligned wall costs one
 subtraction, a tube no product along its axis. Wall and tube contacts keep their history in a few
 slots per particle keyed by the surface index (`wmask` has bit s set while surface s holds a slot,
 so particles away from every wall skip the search); a particle that touches more surfaces than it
