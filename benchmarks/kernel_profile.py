@@ -19,12 +19,12 @@ import numpy as np
 import taichi as ti
 from taichi.lang import impl
 
-from tidem.runtime import startup
-from tidem.studies.bench import bench_scene, profile_scene, tiled_bed
 from tidem.cli.common import build_or_exit, load_scene, script_main
 from tidem.runner.launch import InputError, load_checkpoint
-from tidem.sim.model import build_model
+from tidem.runtime import startup
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
+from tidem.studies.bench import bench_scene, profile_scene, tiled_bed
 
 
 def main(scene: str, run_dir: str, steps: int = 1000, threads: int = 2, sets: list[str] = ()) -> None:

@@ -26,14 +26,14 @@ import numpy as np
 import taichi as ti
 import typer
 
-from tidem.runner import checkpoint
-from tidem.studies.bench import advance, bench_scene, tiled_bed
 from tidem.cli.common import build_or_exit, load_scene
+from tidem.runner import checkpoint
 from tidem.runner.launch import InputError, load_checkpoint
 from tidem.runtime.startup import ensure_taichi
-from tidem.sim.model import build_model
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
 from tidem.sim.solver import Solver
+from tidem.studies.bench import advance, bench_scene, tiled_bed
 
 
 def main(scene: str, run_dir: str, calls: int = 100, threads: int = 2) -> None:

@@ -21,13 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.runner import checkpoint
-
-from tidem.runtime import startup
 from tidem.cli.common import build_or_exit, load_scene
-from tidem.sim.kernel_settings import quiet_bounds
-from tidem.runner.launch import load_checkpoint
 from tidem.particles.overlaps import min_image
+from tidem.runner import checkpoint
+from tidem.runner.launch import load_checkpoint
+from tidem.runtime import startup
+from tidem.sim.kernel_settings import quiet_bounds
 from tidem.sim.solver import Solver
 
 

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 
 from tidem.io.vtp import read_vtp
-from tidem.sim.model import build_model
 from tidem.runner.loop import run
 from tidem.runtime.startup import ensure_taichi
 from tidem.scene.load import load
+from tidem.sim.model import build_model
 
 here = Path(__file__).resolve().parent
 ensure_taichi("cpu", "float64")

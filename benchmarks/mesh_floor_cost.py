@@ -8,19 +8,28 @@ one process (4 rounds of 200 steps); prints how many triangles the particles lis
 
 Usage (from the repository root): python benchmarks/mesh_floor_cost.py [N=100000]
 """
-import os, sys, json, time, tempfile
+import json
+import os
+import sys
+import tempfile
+import time
 from pathlib import Path
+
 import numpy as np
+
 os.environ.setdefault("TI_CPU_MAX_NUM_THREADS", "2")
 from tidem.runtime.startup import ensure_taichi
+
 ensure_taichi("cpu", "float64", 2)
-import taichi as ti
 import mesh_walls as mw
+import taichi as ti
+
 import tidem.walls.mesh_bins as mb
-from tidem.studies.bench import advance, bench_scene, tiled_bed
-from tidem.sim.model import build_model
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
 from tidem.sim.solver import Solver
+from tidem.studies.bench import advance, bench_scene, tiled_bed
+
 n = int(sys.argv[1]) if len(sys.argv) > 1 else 100000
 folder = Path(tempfile.mkdtemp())
 x, extent = tiled_bed(n)
@@ -42,6 +51,7 @@ mb.flat_patches = lambda v, t: np.arange(len(t))
 solvers["mesh, no flat patch"] = Solver(build_model(validate(mesh_floor, "<b>")))
 mb.flat_patches = patches
 import pyvista as pv
+
 ex = extent
 big = pv.PolyData(np.array([[0,0,0],[ex[0],0,0],[ex[0],ex[1],0],[0,ex[1],0]],float), np.array([3,0,1,2,3,0,2,3]))
 big.save(str(folder / "big.stl"))

@@ -92,10 +92,10 @@ def main() -> None:
     ensure_taichi("cpu", "float64", threads)
     import taichi as ti
 
-    from tidem.studies.bench import advance
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
+    from tidem.studies.bench import advance
 
     folder = Path(tempfile.mkdtemp())
     variants = scenes(n, folder, triangles)

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import typer
 
-from tidem.studies.bench import profile_scene
 from tidem.cli.common import build_or_exit, load_scene
 from tidem.runner.launch import InputError, load_checkpoint
 from tidem.runtime.startup import ensure_taichi
+from tidem.studies.bench import profile_scene
 
 
 def main(scene: str, run_dir: str, steps: int = 2000, threads: int = 2) -> None:

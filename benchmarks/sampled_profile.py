@@ -18,14 +18,13 @@ from pathlib import Path
 import numpy as np
 import taichi as ti
 
-from tidem.runner import checkpoint
-
-from tidem.runtime import startup
-from tidem.studies.bench import advance
 from tidem.cli.common import build_or_exit, load_scene, script_main
+from tidem.runner import checkpoint
 from tidem.runner.launch import InputError, load_checkpoint
+from tidem.runtime import startup
 from tidem.runtime.phases import SAMPLE_EVERY, STEP_PHASES, PhaseTimer, clock, sampled_step
 from tidem.sim.solver import Solver
+from tidem.studies.bench import advance
 
 RULES = {"every 16th step": lambda step: step % SAMPLE_EVERY == 0,
          "sampled_step": lambda step: sampled_step(step, SAMPLE_EVERY)}

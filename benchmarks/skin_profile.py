@@ -17,11 +17,10 @@ import sys
 
 import numpy as np
 
+from tidem.cli.common import build_or_exit, load_scene, script_main
 from tidem.runner import checkpoint
-
 from tidem.runtime import startup
 from tidem.studies.bench import profile_scene
-from tidem.cli.common import build_or_exit, load_scene, script_main
 
 CHECK_STEPS = 200
 

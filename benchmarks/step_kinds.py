@@ -18,11 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.runner import checkpoint
-
-from tidem.runtime import startup
 from tidem.cli.common import build_or_exit, load_scene
+from tidem.runner import checkpoint
 from tidem.runner.launch import load_checkpoint
+from tidem.runtime import startup
 from tidem.sim.solver import Solver
 
 

@@ -40,8 +40,8 @@ def column(**tables) -> dict:
 
 
 def settle() -> np.ndarray:
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
 
     raw = column(particles=[{"name": "bed", "material": "sand", "diameter": {"value": D}, "seed": 3,
@@ -68,8 +68,8 @@ def reference(x: np.ndarray, dz: float) -> float:
 
 
 def blow(x: np.ndarray, cell: float, voidage: str = "layered"):
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
 
     raw = column(particles=[{"name": "bed", "material": "sand", "diameter": {"value": D}, "fixed": True,

@@ -46,7 +46,6 @@ from .history_carry import make_history_carry
 from .ordered import in_order
 from .sizes import make_sizes
 
-
 SCAN_BLOCK = 1024  # cells a thread sums in the prefix sum of a large grid
 # Beds of at most this many particles (capacity) count, sum and scatter them into cells in the calling
 # thread on the CPU: each parallel loop costs a wake-up of the thread pool (tens of microseconds on

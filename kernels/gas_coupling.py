@@ -72,15 +72,16 @@ def make_self_share(corner):
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
-                          species: bool = False, tracer_dt: float = 0.0, t_in: float = 0.0,
+                          species: bool = False, tracer_dt: float = 0.0,
                           coarse_grain: bool = False, cut_cells: bool = False, layers: int = 1):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
     particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
     `tracer_dt` (the DEM step, scenes with reactions) a reacting particle's drag coefficient is
     capped at m / (2 dt): one that shrank below the drag relaxation limit follows the gas
-    (tracer limit) instead of making the explicit drag update unstable. `t_in` is the inlet gas
-    temperature, used below the first cell centre. With `coarse_grain`, particle i is a parcel of
+    (tracer limit) instead of making the explicit drag update unstable. With `heat`, the inlet gas
+    temperature G.t_in[0] (set by the host before each gas step, `tidem.gas.phase`) is used below the
+    first cell centre. With `coarse_grain`, particle i is a parcel of
     k^3 grains of diameter d_p / k (k = S.cg[i]): drag and heat exchange are those of one grain
     times k^3 (K_p = k^3 K(eps, d_p/k, w), H_p = k^3 h(d_p/k) pi (d_p/k)^2; the per-grain
     closures of MFiX's CGDEM and CFDEM's coarse-grained models), which keeps the grains'
@@ -178,7 +179,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             J = corner(base, o, -1)
             t = G.T[J]
             if below_inlet(base, o, J):
-                t = 2.0 * t_in - G.T[J]
+                t = 2.0 * G.t_in[0] - G.T[J]
             out += gweight(base, frac, o, -1, s, m) * t
         return out
 
@@ -278,7 +279,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 wh = gweight(base, frac, o, -1, s, m) * hp
                 if below_inlet(base, o, J):
                     G.H[J] -= wh
-                    G.HT[J] += wh * (S.T[i] - 2.0 * t_in)
+                    G.HT[J] += wh * (S.T[i] - 2.0 * G.t_in[0])
                 else:
                     G.H[J] += wh
                     G.HT[J] += wh * S.T[i]

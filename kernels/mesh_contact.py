@@ -334,21 +334,30 @@ def make_mesh_contacts(S, law: int, rolling: bool, n_surf: int, M: int, WM: int,
 
 def make_mesh_mover(S, motions: list[tuple]):
     """A kernel move(t) that puts every triangle of a moving mesh where it is at time t:
-    x = c0 + v t + R(omega t) (x0 - c0) + shift (Rodrigues' rotation about the unit axis; `shift`:
-    the periodic image's offset). `motions`: per mesh (moving, c0, axis, omega, v), constants."""
+    x = c0 + s + R(theta) (x0 - c0) + shift (Rodrigues' rotation about the unit axis; `shift`:
+    the periodic image's offset), theta = omega t and s = v t for a constant motion, compiled in;
+    for a mesh whose motion follows a schedule theta and s are the host's (S.mesh_pose[m] = (theta,
+    s), the schedules' integrals, `tidem.sim.conditions`). `motions`: per mesh (moving, c0, axis,
+    omega, v, scheduled), constants."""
     moving = [mo[0] for mo in motions]
+    scheduled = [mo[5] for mo in motions]
 
     @ti.func
     def place(k, t, m: ti.template()):
-        _moving, c0, axis, omega, vel = motions[m]
+        _moving, c0, axis, omega, vel, _scheduled = motions[m]
         c = ti.Vector(c0)
         a = ti.Vector(axis)
         th = omega * t
+        offset = ti.Vector(vel) * t
+        if ti.static(scheduled[m]):
+            pose = S.mesh_pose[m]
+            th = pose[0]
+            offset = ti.Vector([pose[1], pose[2], pose[3]])
         cs, sn = ti.cos(th), ti.sin(th)
         for j in ti.static(range(3)):
             r = S.tri_rest[k, j] - c
             rot = r * cs + a.cross(r) * sn + a * a.dot(r) * (1.0 - cs)
-            S.tri_v[k, j] = c + ti.Vector(vel) * t + rot + S.tri_shift[k]
+            S.tri_v[k, j] = c + offset + rot + S.tri_shift[k]
 
     @ti.kernel
     def move(t: float):

@@ -45,7 +45,8 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
     vector where all particles are of one material (constants of the kernel), else None (S.ps);
     `min_image`, `radius_of`: `kernels/geometry.py`, `kernels/sizes.py`."""
     n_planes = len(planes)
-    moving = [any(p["vel"]) for p in planes]
+    scheduled = [p.get("speed_schedule") is not None for p in planes]  # the host sets plane_shift, plane_u
+    moving = [any(p["vel"]) or sched for p, sched in zip(planes, scheduled)]
     n_tubes = len(tubes)  # (a Python int: Taichi's AST transformer warns of len() inside a func)
     n_surf = n_planes + n_tubes
     zero3 = ti.Vector([0.0, 0.0, 0.0])
@@ -90,7 +91,10 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
         if ti.static(s < n_planes):
             t0, t1 = planes[s]["t"]
             p = ti.Vector(planes[s]["p0"])
-            if ti.static(moving[s]):
+            if ti.static(scheduled[s]):
+                p += S.plane_shift[s]
+                u = S.plane_u[s]
+            elif ti.static(moving[s]):
                 tc = ti.min(ti.max(t, t0), t1)
                 p += ti.Vector(planes[s]["vel"]) * (tc - t0)
                 if t > t0 and t < t1:

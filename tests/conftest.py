@@ -42,8 +42,8 @@ def make_scene(**tables) -> dict:
 @pytest.fixture
 def solver_for():
     """Build a Solver from a raw scene dict; released after the test."""
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
 
     made = []

@@ -71,10 +71,10 @@ def time_tidem(dump: str, stl: str, nwarm: int, nsteps: int, threads: int) -> No
     ensure_taichi("cpu", "float64", threads)
     import taichi as ti
 
-    from tidem.studies.bench import advance
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
+    from tidem.studies.bench import advance
 
     x, v = read_dump(dump)
     solver = Solver(build_model(validate(drum_scene(x, v, stl), "<drum>")))

@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.results.observables import RunRecord, discharge_rate
 from tidem.render.plots import read_series
+from tidem.results.observables import RunRecord, discharge_rate
 
 D = 0.004  # mean bead diameter [m]
 L = 0.02  # slot length (the slab's period) [m]

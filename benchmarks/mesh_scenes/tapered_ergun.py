@@ -94,8 +94,8 @@ def held_share(solver, grains: int, d: float) -> float:
 
 
 def main(cells: list[float], d: float, cases: list[str]) -> None:
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
 
     ensure_taichi("cpu", "float64")

@@ -10,6 +10,7 @@ smoothing (sigma given below), kept if their prominence exceeds a threshold and
 they are at least `min_sep` apart (the higher one wins).
 """
 import json
+
 import numpy as np
 
 DT = 1e-3

@@ -4,12 +4,12 @@ fractions of cut cells, against geometry worked out by hand."""
 import math
 
 import numpy as np
-import pyvista as pv
 import pytest
+import pyvista as pv
 
 from tidem.gas.geometry import face_kinds, gas_walls
-from tidem.gas.mesh import MIN_PART, gas_cut
 from tidem.gas.grid_graph import components
+from tidem.gas.mesh import MIN_PART, gas_cut
 from tidem.kernels.gas_grid import CLOSED, INLET, OUTLET, GasGrid
 from tidem.walls.mesh_walls import MeshWall
 
@@ -97,9 +97,9 @@ def test_a_plate_on_the_distributor_closes_the_inlet_under_it_and_a_pocket_is_se
 
 
 def test_a_scene_whose_meshes_seal_the_gas_off_is_refused(tmp_path):
-    from tidem.sim.model import build_model
     from tidem.scene.errors import SceneError
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     raw = slot_bed(tmp_path)
     path = tmp_path / "lid.stl"

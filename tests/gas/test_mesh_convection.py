@@ -10,11 +10,11 @@ import pytest
 import pyvista as pv
 
 from tests.conftest import make_scene
-from tidem.runner.check_report import mesh_convection_lines
-from tidem.heat.drum_heat import mesh_heat_rows
 from tidem.gas.geometry import convection_walls, gas_walls, spans_period, tube_walls
-from tidem.kernels.gas_grid import GasGrid
 from tidem.gas.mesh_convection import centroids, wetted_area
+from tidem.heat.drum_heat import mesh_heat_rows
+from tidem.kernels.gas_grid import GasGrid
+from tidem.runner.check_report import mesh_convection_lines
 from tidem.walls.mesh_walls import MeshWall
 
 SAND = {"density": 2500.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.9, "friction": 0.3,

@@ -6,13 +6,8 @@ import math
 import pytest
 
 from tests.conftest import make_scene
-from tidem.heat.impact_conduction import (
-    CONTACT_TIME_FACTOR,
-    SPOT_INTEGRAL_FACTOR,
-    hertz_impact,
-    quasi_static_impact_heat,
-    sun_chen_impact_heat,
-)
+from tidem.heat.impact_conduction import (CONTACT_TIME_FACTOR, SPOT_INTEGRAL_FACTOR, hertz_impact,
+                                          quasi_static_impact_heat, sun_chen_impact_heat)
 from tidem.particles.timestep import hertz_contact_time
 
 # SUS304 spheres of source 1: d = 19.1 mm, 7729.6 kg/m^3, E = 184.365 GPa, nu = 0.305

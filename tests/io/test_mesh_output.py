@@ -93,9 +93,9 @@ def test_a_run_writes_its_meshes_and_names_them_in_run_json(tmp_path):
     import json
 
     from tests.conftest import make_scene
-    from tidem.sim.model import build_model
     from tidem.runner.loop import run
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     model = build_model(validate(make_scene(numerics={"t_end": 2e-5}, output={"snapshots": 2})))
     far = MeshWall(name="meshes[0]", vertices=CUBE_V + 0.5, triangles=CUBE_T, material="steel", velocity=(1.0, 0, 0))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.sim.kernel_settings import quiet_bounds
 from tidem.kernels.geometry import slab_axis_for, slab_layout
+from tidem.sim.kernel_settings import quiet_bounds
 
 
 def brute_force_pairs(x, r, skin, lengths, periodic):

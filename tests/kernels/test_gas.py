@@ -284,8 +284,8 @@ def test_a_tube_thinner_than_a_gas_cell_still_fills_one(centre):
     ({"cell_size": 0.004, "inlet_temperature": 400.0}, "gas temperatures need a [heat] table"),
 ])
 def test_bad_gas_input_is_named(gas, fragment):
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     raw = packed_column(0.1)
     raw["gas"] = gas

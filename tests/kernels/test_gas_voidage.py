@@ -24,8 +24,8 @@ def column(**tables) -> dict:
 def settled_bed():
     """About 1 000 grains of 1 mm let fall from a lattice onto the distributor of a periodic 8 x 8 mm column
     and settled (0.2 s, no gas): a random packing with a loose first layer and a rough surface."""
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
 
     raw = column(particles=[{"name": "bed", "material": "sand", "diameter": {"value": D}, "seed": 3,

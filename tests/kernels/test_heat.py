@@ -192,9 +192,9 @@ def test_wall_contact_conductance_matches_the_formula(solver_for):
 
 
 def test_unstable_thermal_step_is_refused():
-    from tidem.sim.model import build_model
     from tidem.scene.errors import SceneError
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     raw = make_scene(materials={"steel": {**STEEL, "heat_capacity": 1e-9}}, heat={})
     with pytest.raises(SceneError, match="explicit conduction limit"):

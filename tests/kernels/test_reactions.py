@@ -12,7 +12,7 @@ import pytest
 
 from tests.conftest import make_scene
 from tidem.heat.reactions import (ENTHALPY_OUT, GONE, H_CO, H_CO2, HEAT_RELEASED, LATENT, M_C, M_O2, O2_USED, R_GAS,
-                             REACTED)
+                                  REACTED)
 from tidem.scene.errors import SceneError
 from tidem.sim.solver import RunError
 
@@ -363,8 +363,8 @@ def test_sublimating_cloud_cools_its_gas_by_the_heat_taken(solver_for):
      "set domain.walls = \"none\""),
 ])
 def test_bad_reaction_input_is_named(change, fragment):
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     raw = char_scene([[0.004, 0.004, 0.004]])
     change(raw)
@@ -374,8 +374,8 @@ def test_bad_reaction_input_is_named(change, fragment):
 
 
 def test_too_long_step_for_sublimation_is_refused():
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     raw = plasma_scene([[0.001, 0.001, 0.001]])
     raw["numerics"]["dt"] = 1e-6

@@ -200,8 +200,8 @@ def test_a_sublimating_parcel_lasts_its_grains_d2_time(solver_for):
 @pytest.mark.parametrize("k, parcels", [(1.0, 800), (2.0, 100), (1.5, 237)])
 def test_count_counts_grains_so_the_bed_mass_stays(k, parcels):
     """`count` of a region fill is in grains: k^3 grains per parcel, the bed's mass kept to one parcel."""
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     raw = heated_bed(coarse_grain=k, count=800)
     model = build_model(validate(raw))

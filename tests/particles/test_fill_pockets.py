@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from tidem.walls.mesh_load import load_mesh_walls
 from tidem.particles.placement import place_groups
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
+from tidem.walls.mesh_load import load_mesh_walls
 
 W, SLOT, TOP, DEPTH = 0.1, 0.016, 0.1, 0.004  # the wedge: plates from a 16 mm slot to the side walls 100 mm up
 

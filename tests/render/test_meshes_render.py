@@ -9,10 +9,10 @@ import pytest
 
 from tidem.io.mesh_output import MeshOutput, mesh_geometry
 from tidem.io.vtp import write_pvd, write_vtp
-from tidem.walls.mesh_walls import MeshWall
 from tidem.render.frames import FrameStyle, frame_size, render_frame
 from tidem.render.gl import RenderUnavailable, prepare_offscreen
 from tidem.render.meshes import mesh_surface
+from tidem.walls.mesh_walls import MeshWall
 
 try:
     prepare_offscreen()
@@ -131,9 +131,9 @@ def test_run_folder_meshes_reach_the_frames_through_run_json(tmp_path):
 
 def test_colour_range_spans_the_meshes_temperature_and_speed():
     from tests.conftest import make_scene
-    from tidem.sim.model import build_model
     from tidem.render.settings import default_range
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
 
     steel = {"density": 7800.0, "youngs_modulus": 2e9, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.3,
              "conductivity": 16.0, "heat_capacity": 500.0}

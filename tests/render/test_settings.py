@@ -5,10 +5,10 @@ import math
 import pytest
 
 from tests.conftest import make_scene
-from tidem.sim.model import build_model
 from tidem.render.settings import default_range, render_settings
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
 
 STEEL = {"density": 7800.0, "youngs_modulus": 2e9, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.3,
          "conductivity": 16.0, "heat_capacity": 500.0}

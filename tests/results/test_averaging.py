@@ -9,13 +9,13 @@ import pytest
 
 from tests.conftest import make_scene
 from tests.scene.test_bad_input import impact_scene, run_check
-from tidem.results.averaging import CELLS_CSV, RINGS_CSV, VTI, cell_rows, ring_rows
 from tidem.io.vtp import read_vti
-from tidem.sim.model import build_model
 from tidem.render.plots import read_series
+from tidem.results.averaging import CELLS_CSV, RINGS_CSV, VTI, cell_rows, ring_rows
 from tidem.runner.loop import run
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
 
 A = 0.01  # lattice spacing and particle diameter [m]
 STEEL = {"density": 7800.0, "youngs_modulus": 2e11, "poisson_ratio": 0.3, "restitution": 1.0, "friction": 0.0,

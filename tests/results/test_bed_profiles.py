@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from tidem.results.bed_profiles import ProfileRecorder, profile_rows
-from tidem.sim.model import build_model
 from tidem.scene.errors import SceneError
 from tidem.scene.load import load
+from tidem.sim.model import build_model
 from tidem.sim.solver import Solver
 
 SHORT = ["domain.max=[0.012, 0.012, 0.12]", "domain.periodic=[]", "particles[0].region.max=[0.012, 0.012, 0.12]",

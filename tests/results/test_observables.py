@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from tidem.results import observables as obs
 from tidem.cli.commands import app
+from tidem.results import observables as obs
 from tidem.scene.errors import SceneError
 from tidem.scene.load import load
 from tidem.scene.observable_names import NEEDS

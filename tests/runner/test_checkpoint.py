@@ -10,13 +10,13 @@ import pytest
 from typer.testing import CliRunner
 
 from tests.conftest import make_scene
-from tidem.runner import checkpoint
 from tidem.cli.commands import app
 from tidem.io.vtp import read_vtp
-from tidem.sim.model import build_model
 from tidem.render.plots import read_series
+from tidem.runner import checkpoint
 from tidem.runner.loop import run
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
 from tidem.sim.solver import Solver
 
 SAND = {"density": 2600.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.3, "friction": 0.5,

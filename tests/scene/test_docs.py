@@ -4,6 +4,7 @@ from pathlib import Path
 
 from pydantic import BaseModel
 
+import tidem.scene.schedule as schedule
 import tidem.scene.schema as schema
 import tidem.scene.types as types
 
@@ -11,7 +12,7 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "scenes.md"
 
 
 def all_models():
-    for mod in (schema, types):
+    for mod in (schema, types, schedule):
         for obj in vars(mod).values():
             if isinstance(obj, type) and issubclass(obj, BaseModel) and obj.__module__ == mod.__name__:
                 yield obj

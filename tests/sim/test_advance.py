@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 import taichi as ti
 
+from tests.particles.test_storage_order import shuffled_bed
 from tidem.kernels.contact import BLOCKS, block_count
 from tidem.kernels.geometry import slab_layout
-from tests.particles.test_storage_order import shuffled_bed
 
 FIELDS = ("x", "v", "w", "f", "tq", "T", "ft", "mr", "ncontact", "ovl")
 
@@ -120,8 +120,8 @@ def test_one_size_and_material_as_constants_follow_the_loaded_values(solver_for,
     the pair parameters as constants of the kernel (`Model.uniform_particles`, `Model.one_material`)
     instead of loading them: the same bed as with the loads, to rounding; the bed with a second size
     or material loads them."""
-    from tidem.sim.model import Model, build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import Model, build_model
 
     raw = hot_and_cold_bed()
     constants = sheared(solver_for(raw))

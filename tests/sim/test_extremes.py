@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.sim.model import build_model
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
 from tidem.sim.solver import Solver
 
 

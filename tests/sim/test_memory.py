@@ -4,10 +4,10 @@ allocation, and the same field bytes as the built model."""
 import pytest
 
 from tests.conftest import make_scene
-from tidem.sim import memory
-from tidem.sim.model import build_model
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
+from tidem.sim import memory
+from tidem.sim.model import build_model
 
 
 @pytest.mark.parametrize("n, text", [(0, "0 B"), (512, "512 B"), (1536, "1.5 KiB"), (3.2 * 2**40, "3.2 TiB"),

@@ -9,10 +9,10 @@ import sys
 import pytest
 
 from tests.conftest import make_scene
-from tidem.sim import memory
-from tidem.sim.model import build_model
 from tidem.scene.errors import SceneError
 from tidem.scene.load import load, validate
+from tidem.sim import memory
+from tidem.sim.model import build_model
 
 PEAK = """
 import sys

@@ -7,11 +7,12 @@ import pytest
 import pyvista as pv
 
 import tidem.walls.mesh_geometry as geometry
-from tidem.walls.mesh_geometry import facet_sag, flat_patches, inside_closed_mesh, inside_periodic_mesh, point_mesh_distance, weld
-from tidem.walls.mesh_load import load_mesh_walls, rotation_matrix, tube_mesh_overlaps
 from tidem.particles.placement import clear_of_obstacles, lattice_sites, place_groups
 from tidem.scene.errors import SceneError
 from tidem.scene.load import resolve, validate
+from tidem.walls.mesh_geometry import (facet_sag, flat_patches, inside_closed_mesh, inside_periodic_mesh,
+                                       point_mesh_distance, weld)
+from tidem.walls.mesh_load import load_mesh_walls, rotation_matrix, tube_mesh_overlaps
 
 
 def raw_scene(**extra) -> dict:

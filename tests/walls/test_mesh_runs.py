@@ -9,9 +9,9 @@ import pyvista as pv
 from tests.conftest import make_scene
 from tests.runner.test_checkpoint import snapshots
 from tidem.runner import checkpoint
-from tidem.sim.model import build_model
 from tidem.runner.loop import run
 from tidem.scene.load import validate
+from tidem.sim.model import build_model
 
 SAND = {"density": 2600.0, "youngs_modulus": 1e7, "poisson_ratio": 0.3, "restitution": 0.3, "friction": 0.5,
         "rolling_friction": 0.1, "conductivity": 3.0, "heat_capacity": 800.0}

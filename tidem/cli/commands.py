@@ -18,6 +18,7 @@ import typer
 from tidem.cli.common import Sets, app, build_or_exit, fail, load_scene, start_taichi
 from tidem.scene.errors import SceneError
 
+
 def main() -> None:
     """The `tidem` command: the app, with an unexpected exception turned into one line and a log
     file (exit 70, `tidem.cli.crash`); Ctrl-C keeps its own handling (the run loop saves its output)."""
@@ -100,8 +101,8 @@ def _report(quiet: bool):
 
 def _render(run_dir: Path, name: str, field=None, clim=None, view=None, slice_thickness=None, gif=None) -> None:
     """Frames and movie of a run folder; a machine without OpenGL gets a message, not a crash."""
-    from tidem.runner.launch import movie_and_plots
     from tidem.render.gl import RenderUnavailable, prepare_offscreen
+    from tidem.runner.launch import movie_and_plots
 
     try:
         prepare_offscreen()
@@ -177,10 +178,11 @@ def check(
     import numpy as np
 
     from tidem.runner.check_report import gas_line, gas_notes, mesh_convection_lines, output_notes
+    from tidem.runner.output_size import output_bytes
+    from tidem.scene.schedule import scheduled_keys, summary_line
+    from tidem.scene.schema import MAX_CONDUCTION_INTERVAL
     from tidem.sim.memory import format_bytes
     from tidem.walls.mesh_walls import report_lines
-    from tidem.runner.output_size import output_bytes
-    from tidem.scene.schema import MAX_CONDUCTION_INTERVAL
 
     loaded = load_scene(path, set_)
     model = build_or_exit(loaded)
@@ -209,6 +211,7 @@ def check(
         *([f"conduction: every {loaded.scene.heat.conduction_interval} step(s); explicit limit {model.thermal_limit:.4g} s "
            f"(heat.conduction_interval up to {min(int(model.thermal_limit / model.dt), MAX_CONDUCTION_INTERVAL)})"] if model.thermal_limit else []),
         f"walls: {', '.join(p['name'] for p in model.planes) or 'none'}; tubes: {len(model.tubes)}",
+        *[summary_line(key, plan) for key, plan in scheduled_keys(loaded.scene)],
         *([gas_line(model)] if f.gas else []),
         *report_lines(model.meshes, model.mesh_table, 2 * float(model.radius.min())),
         *(model.gas_cut.report_lines() if model.gas_cut is not None else []),
@@ -292,9 +295,9 @@ def _profile(path: str, sets: Optional[list[str]], steps: int, warmup: int, thre
     """`tidem bench --profile`: a scene's steps timed by phase (`tidem.studies.bench.profile_scene`)."""
     import json
 
-    from tidem.studies.bench import profile_scene
     from tidem.runtime.phases import format_table
     from tidem.sim.solver import RunError
+    from tidem.studies.bench import profile_scene
 
     if steps < 1 or warmup < 0:
         fail(f"--steps {steps} --warmup {warmup}: need at least one timed step and no negative warm-up", 2)

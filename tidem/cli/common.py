@@ -39,7 +39,8 @@ def load_scene(path: Optional[str], sets: Optional[list[str]]):
 
 def start_taichi(arch: str, precision: str, threads: int | None = None) -> None:
     """Start Taichi on `arch` (`tidem.runner.launch.start_taichi`), or exit 2 with the reason."""
-    from tidem.runner.launch import InputError, start_taichi as start
+    from tidem.runner.launch import InputError
+    from tidem.runner.launch import start_taichi as start
 
     try:
         start(arch, precision, threads)
@@ -59,7 +60,8 @@ def build_or_exit(loaded, smoke=False, t_end=None):
 
 def writable(out_dir: Path, option: str) -> None:
     """Exit 2 naming the option unless `out_dir` is (or can be made) a folder this process can write in."""
-    from tidem.runner.launch import InputError, writable as check
+    from tidem.runner.launch import InputError
+    from tidem.runner.launch import writable as check
 
     try:
         check(out_dir, option)

@@ -106,8 +106,8 @@ def sweep(
 
 
 def halve_until_agreed(path, key: str, tol: float, set_, out, threads=None) -> None:
-    from tidem.studies import tradeoff as tr
     from tidem.scene.load import load
+    from tidem.studies import tradeoff as tr
 
     loaded = load_scene(path, set_)
     node = loaded.scene.model_dump()

@@ -17,7 +17,7 @@ correction's coefficients), gp (pressure gradient [Pa/m]), B and Bv (deposited d
 coefficients), kind (CLOSED, INTERIOR, INLET, OUTLET); with tubes or meshes open_face (the open
 volume of the face's drag), with meshes aperture (the face's open share). Bottom faces: inlet (superficial
 velocity [m/s]). Scalars: sums (CG dot products), heat_rate (max over particles of
-H_p / (m_p c_p) [1/s]), with reactions bsum (enthalpy [J] and O2 [kg] that entered through
+H_p / (m_p c_p) [1/s]), with heat t_in (the inlet gas temperature [K]), with reactions bsum (enthalpy [J] and O2 [kg] that entered through
 inlet and outlet; the most negative Y).
 """
 
@@ -92,6 +92,9 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
     fb.dense(ti.i, 4).place(G.sums)
     G.heat_rate = ti.field(fp)  # set by `couple`
     fb.dense(ti.i, 1).place(G.heat_rate)
+    if heat:
+        G.t_in = ti.field(fp)  # the inlet gas temperature [K], set by the host before each gas step
+        fb.dense(ti.i, 1).place(G.t_in)
     if walls is not None:
         for name in ("wall_A", "wall_T", "wall_D"):
             setattr(G, name, ti.field(fp))

@@ -13,8 +13,8 @@ import numpy as np
 
 from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
-from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET
-from tidem.kernels.gas_grid import GasGrid
+from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
+from tidem.scene.schedule import value_at
 
 
 def gas_grid(scene) -> GasGrid:
@@ -187,17 +187,18 @@ def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:
     return kinds
 
 
-def inlet_map(gg: GasGrid, gas) -> np.ndarray:
-    """Superficial inlet velocity [m/s] of each bottom face (nozzles override the background)."""
+def inlet_map(gg: GasGrid, gas, t: float = 0.0) -> np.ndarray:
+    """Superficial inlet velocity [m/s] of each bottom face at time t (nozzles override the background;
+    each velocity at its scheduled value where the scene gives a schedule)."""
     xc = gg.lo[0] + (np.arange(gg.cells[0]) + 0.5) * gg.h[0]
     yc = gg.lo[1] + (np.arange(gg.cells[1]) + 0.5) * gg.h[1]
     X, Y = np.meshgrid(xc, yc, indexing="ij")
-    u = np.full(X.shape, gas.inlet_velocity)
+    u = np.full(X.shape, value_at(gas.inlet_velocity, t))
     for nz in gas.nozzles:
         inside = (X >= nz.x[0]) & (X <= nz.x[1])
         if nz.y is not None:
             inside &= (Y >= nz.y[0]) & (Y <= nz.y[1])
-        u[inside] = nz.velocity
+        u[inside] = value_at(nz.velocity, t)
     return u
 
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from tidem.gas.geometry import gas_grid
 from tidem.kernels.gas_grid import GasGrid
+from tidem.scene.schedule import first_above, is_scheduled, peak
 
 MAX_COURANT = 0.5
 
@@ -18,13 +19,31 @@ def drag_rate_bound(gas, d: float, rho_p: float) -> float:
     """Upper estimate of K/m [1/s] for a particle of diameter d and density rho_p: the larger
     of the Wen-Yu Stokes-range drag at eps = 0.8 (Re from the fastest inlet velocity) and the
     Ergun drag at the clipped voidage; twice that for margin."""
-    u = max([gas.inlet_velocity] + [nz.velocity for nz in gas.nozzles]) / gas.min_voidage
+    u = fastest_inlet(gas) / gas.min_voidage
     mu, rho = gas.viscosity, gas.density
     re = rho * u * d / mu
     wen_yu = 18 * mu / (rho_p * d * d) * (1 + 0.15 * re**0.687) * 0.8**-2.65
     eps = gas.min_voidage
     ergun = (150 * (1 - eps) * mu / (eps * d * d) + 1.75 * rho * u / (eps * d)) / rho_p
     return 2.0 * max(wen_yu, ergun)
+
+
+def inlet_velocities(gas) -> list[tuple[str, object]]:
+    """(key, value or schedule) of the background inlet velocity and each nozzle's."""
+    return [("gas.inlet_velocity", gas.inlet_velocity)] + [
+        (f"gas.nozzles[{i}].velocity", nz.velocity) for i, nz in enumerate(gas.nozzles)]
+
+
+def fastest_inlet(gas) -> float:
+    """The largest superficial inlet velocity at any time of the run [m/s]."""
+    return max(peak(u) for _, u in inlet_velocities(gas))
+
+
+def first_inlet_above(gas, limit: float) -> tuple[str, float] | None:
+    """(key, time [s]) of the scheduled inlet velocity that first exceeds `limit` m/s, or None (also
+    where only constant velocities exceed it: they do from the start)."""
+    times = [(t, key) for key, u in inlet_velocities(gas) if is_scheduled(u) and (t := first_above(u, limit)) is not None]
+    return (min(times)[1], min(times)[0]) if times else None
 
 
 def fixed_bed_voidage(gg: GasGrid, x: np.ndarray, radius: np.ndarray) -> float:
@@ -56,12 +75,18 @@ def gas_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarray,
                     "dt_fraction), or larger particles")
     dt_gas = gas.coupling_interval * dt
     voidage = gas.min_voidage if fixed_x is None else max(gas.min_voidage, fixed_bed_voidage(gg, fixed_x, radius))
-    u = max([gas.inlet_velocity] + [nz.velocity for nz in gas.nozzles]) / voidage
+    u = fastest_inlet(gas) / voidage
     courant = u * dt_gas / min(gg.h)
     if courant > MAX_COURANT:
         stable = max(1, int(MAX_COURANT * min(gg.h) / (u * dt)))
+        passed = first_inlet_above(gas, MAX_COURANT * min(gg.h) / dt_gas * voidage)
+        when, fix = "", ""
+        if passed is not None:
+            when = f" that {passed[0]} reaches at t = {passed[1]:.4g} s on its schedule"
+            fix = f", or keep {passed[0]} below {MAX_COURANT * min(gg.h) / dt_gas * voidage:.3g} m/s"
         errs.append(f"gas.coupling_interval: a gas step of {dt_gas:.3g} s gives a Courant number {courant:.2f} at the "
-                    f"interstitial inlet velocity {u:.3g} m/s (limit {MAX_COURANT}); use coupling_interval <= {stable}")
+                    f"interstitial inlet velocity {u:.3g} m/s{when} (limit {MAX_COURANT}); use coupling_interval <= "
+                    f"{stable}{fix}")
     diffusion = gas.viscosity / gas.density * dt_gas * sum(1 / h**2 for h in gg.h)
     if diffusion > 0.5:
         stable = max(1, int(0.5 / (gas.viscosity / gas.density * dt * sum(1 / h**2 for h in gg.h))))

@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas.mesh import GasCut
-from tidem.walls.mesh_geometry import inside_mesh
 from tidem.kernels.gas_grid import GasGrid
+from tidem.walls.mesh_geometry import inside_mesh
 
 CHUNK = 1_000_000  # sample points handled at once
 

@@ -30,8 +30,8 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas.geometry import shifted
-from tidem.gas.mesh import MIN_OPEN, GasCut, cell_index, sub_grid
 from tidem.gas.grid_graph import bordering
+from tidem.gas.mesh import MIN_OPEN, GasCut, cell_index, sub_grid
 from tidem.kernels.gas_grid import CLOSED, GasGrid, layer_grid
 
 SUB_TUBE = 12  # points per cell along its longest side within reach of a tube (its round edge sampled)

@@ -18,6 +18,12 @@ import math
 import numpy as np
 import taichi as ti
 
+from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
+from tidem.gas.fields import allocate_gas_fields
+from tidem.gas.geometry import convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter, voidage_layers
+from tidem.gas.limits import MAX_COURANT
+from tidem.gas.open_volume import open_volumes
+from tidem.gas.species import M_O2, o2_mass_fraction
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.field_copy import FieldCopier
 from tidem.kernels.gas_band import band_width
@@ -25,14 +31,8 @@ from tidem.kernels.gas_coupling import make_coupling_kernels
 from tidem.kernels.gas_flow import RR, cg_batch, make_flow_kernels, serial_solve
 from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
-from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
-from tidem.gas.fields import allocate_gas_fields
-from tidem.gas.geometry import (convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter,
-                                 voidage_layers)
-from tidem.gas.limits import MAX_COURANT
-from tidem.gas.open_volume import open_volumes
 from tidem.runtime.phases import PhaseTimer, clock
-from tidem.gas.species import M_O2, o2_mass_fraction
+from tidem.scene.schedule import is_scheduled, start, value_at
 
 
 def probe_column(z: float) -> str:
@@ -70,10 +70,11 @@ class GasPhase:
         self.solid, self.kinds, self.cut = gas_walls(gg, model.tubes, model.meshes, model.gas_cut)
         self.tubes = model.tubes
         self.heated_meshes = [k for k, m in enumerate(model.meshes) if m.temperature is not None]
-        self.inlet = inlet_map(gg, gas)
+        self.inlet = inlet_map(gg, gas, 0.0)
         walls = convection_walls(gg, model.tubes, model.meshes, self.cut) \
             if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
+        self._wall_T = (walls["wall_T"].copy(), walls["wall_k"], walls["wall_A"] > 0.0) if self.walls else None
         self.layers = voidage_layers(model)
         self.open = open_volumes(gg, self.solid, self.kinds, model.tubes, self.cut, self.layers)
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
@@ -87,7 +88,9 @@ class GasPhase:
                                                               ("wall_rate", self.walls)) if on})
         self._host = FieldCopier(host)  # what samples and snapshots read, in one launch (`kernels/field_copy.py`)
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
-        self.t_in = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
+        self.t_in_key = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
+        self.t_in = float(start(self.t_in_key))
+        self.scheduled_inlet = any(is_scheduled(u) for u in [gas.inlet_velocity, *(nz.velocity for nz in gas.nozzles)])
         wall_grain, wall_umf = 0.0, 0.0
         if self.walls and gas.tube_convection == "martin_nilles":
             wall_grain = grain_sauter_diameter(model)
@@ -104,7 +107,7 @@ class GasPhase:
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
-            model.dt if self.sources else 0.0, self.t_in, model.features.coarse_grain, self.open is not None,
+            model.dt if self.sources else 0.0, model.features.coarse_grain, self.open is not None,
             self.layers)
         if self.species:
             ox = gas.oxygen
@@ -115,6 +118,7 @@ class GasPhase:
         if self.heat:
             T0 = gas.initial_temperature or scene.heat.initial_temperature
             G.T.fill(T0)
+            G.t_in.fill(self.t_in)
         self.n = model.capacity
         self.iterations = 0
         self.residual = 0.0
@@ -124,14 +128,44 @@ class GasPhase:
         self._deposit(self.n)
         G.eps_old.copy_from(G.eps)
         # start from the inlet flow (at its ramped value) spread over the bed
-        uz = np.where(self.kinds[2] == CLOSED, 0.0, gas.inlet_velocity * self.inlet_scale)
+        uz = np.where(self.kinds[2] == CLOSED, 0.0, start(gas.inlet_velocity) * self.inlet_scale)
         G.u[2].from_numpy(uz)
 
     def set_inlet(self, t: float) -> None:
+        """The inlet velocities at time t: gas.inlet_ramp's share of the map, or the scheduled velocities."""
         ramp = self.gas.inlet_ramp
         scale = min(t / ramp, 1.0) if ramp > 0 else 1.0
+        if self.scheduled_inlet:
+            inlet = inlet_map(self.gg, self.gas, t)
+            if t > 0.0 and np.array_equal(inlet, self.inlet):
+                return
+            self.inlet = inlet
         self.G.inlet.from_numpy(self.inlet * scale)
         self.inlet_scale = scale
+
+    def sync_from_fields(self) -> None:
+        """After a checkpoint's fields are restored: take the scheduled inlet and wall temperatures the
+        host keeps from the fields, as the last gas step set them."""
+        if self.heat:
+            self.t_in = float(self.G.t_in[0])
+        if self.scheduled_inlet:
+            self.inlet = self.G.inlet.to_numpy()
+        if self._wall_T is not None:
+            self._wall_T[0][...] = self.G.wall_T.to_numpy()
+
+    def set_wall_temperature(self, wall: int, value: float) -> None:
+        """The temperature [K] of heated wall `wall` (tube k, then mesh k after the tubes) in the cells whose
+        gas it heats (wall_T), as its schedule gives it (`tidem.sim.conditions`)."""
+        wall_T, wall_k, heated = self._wall_T
+        wall_T[heated & (wall_k == wall)] = value
+        self.G.wall_T.from_numpy(wall_T)
+
+    def set_inlet_temperature(self, t: float) -> None:
+        """The inlet gas temperature at time t, where a schedule gives it."""
+        t_in = float(value_at(self.t_in_key, t))
+        if t_in != self.t_in:
+            self.t_in = t_in
+            self.G.t_in.fill(t_in)
 
     def step(self, t: float) -> None:
         """One gas step ending at time t (particles at their current positions and velocities)."""
@@ -139,8 +173,10 @@ class GasPhase:
         f = self.flow
         lap = self.timer.lap
         start = clock()
-        if self.inlet_scale < 1.0:  # ramping up
+        if self.inlet_scale < 1.0 or self.scheduled_inlet:  # ramping up, or on a schedule
             self.set_inlet(t)
+        if self.heat and is_scheduled(self.t_in_key):
+            self.set_inlet_temperature(t)
         self._deposit(self.n)
         rate = self._couple(self.n)
         start = lap("gas coupling", start)

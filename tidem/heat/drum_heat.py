@@ -25,8 +25,8 @@ import math
 
 import numpy as np
 
-from tidem.kernels.heat import schluender_alpha_wp
 from tidem.heat.packet_model import BED_POROSITY, COVERED_SHARE, penetration_alpha, zehner_schluender_conductivity
+from tidem.kernels.heat import schluender_alpha_wp
 
 SURFACE_SPAN = 0.6  # share of the bed's width, about its middle, whose top particles make the free surface
 
@@ -34,6 +34,11 @@ SURFACE_SPAN = 0.6  # share of the bed's width, about its middle, whose top part
 def _late(series: dict, column: str) -> np.ndarray:
     t = series["time_s"]
     return np.asarray(series[column])[t >= 0.5 * t[-1]]
+
+
+def _late_times(series: dict) -> np.ndarray:
+    t = np.asarray(series["time_s"])
+    return t[t >= 0.5 * t[-1]]
 
 
 def free_surface(x: np.ndarray, radius: np.ndarray, centre, axis, gravity) -> tuple[float, float] | None:
@@ -74,7 +79,7 @@ def mesh_heat_rows(model, x: np.ndarray, radius: np.ndarray, series: dict) -> li
         if mesh.temperature is None or key not in series:
             continue
         q = _late(series, key)
-        dt = mesh.temperature - t_bed
+        dt = np.array([mesh.temperature_at(t) for t in _late_times(series)]) - t_bed  # a schedule's value at each sample
         row = {"mesh": k, "heat_W": float(np.mean(q)), "area_m2": float(mesh.stats.get("area", np.nan))}
         row["mean_alpha_W_m2K"] = float(np.mean(q / (row["area_m2"] * dt)))
         if f"meshes{k}_gas_heat_W" in series:  # convection to the gas joins the particles' share
@@ -83,14 +88,15 @@ def mesh_heat_rows(model, x: np.ndarray, radius: np.ndarray, series: dict) -> li
             row["gas_heat_W"] = float(np.mean(q_gas))
             row["gas_alpha_W_m2K"] = float(np.mean(q_gas / (row["area_m2"] * dt)))
             row["mean_alpha_W_m2K"] += row["gas_alpha_W_m2K"]
-        if mesh.speed != 0.0 and len(x):
-            row.update(_drum(model, mesh, x, radius, q, dt))
+        if mesh.rotates and mesh.speed_at(float(series["time_s"][-1])) != 0.0 and len(x):
+            row.update(_drum(model, mesh, x, radius, q, dt, float(series["time_s"][-1])))
         rows.append(row)
     return rows
 
 
-def _drum(model, mesh, x, radius, q, dt) -> dict:
-    """Bed geometry, the wetted-wall coefficient and the penetration model of a rotating mesh."""
+def _drum(model, mesh, x, radius, q, dt, t_end: float) -> dict:
+    """Bed geometry, the wetted-wall coefficient and the penetration model of a rotating mesh (its
+    rotation speed at the end, `t_end`, where a schedule gives it)."""
     out = {}
     surface = free_surface(x, radius, mesh.center, mesh.axis, model.scene.domain.gravity)
     big_r = mesh.reach_from_axis()
@@ -106,7 +112,7 @@ def _drum(model, mesh, x, radius, q, dt) -> dict:
     group = model.scene.particles[0]
     mat = model.scene.materials[group.material]
     heat = model.scene.heat
-    t_c = eps / abs(mesh.speed)
+    t_c = eps / abs(mesh.speed_at(t_end))
     d = 2.0 * float(np.mean(radius))
     lam = zehner_schluender_conductivity(mat.conductivity, heat.gas_conductivity, BED_POROSITY)
     a_c = COVERED_SHARE * float(schluender_alpha_wp(heat.gas_conductivity, d, heat.gas_mean_free_path + heat.roughness))

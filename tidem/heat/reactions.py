@@ -13,10 +13,12 @@ import math
 
 import numpy as np
 
-from tidem.kernels.reactions import (CHAR, ESCAPED, GONE, LATENT, MASS_ESCAPED, O2_USED, POLY,  # noqa: F401
-                                     REACTED, SUBL, ENTHALPY_OUT, HEAT_RELEASED)
 from tidem.gas.geometry import gas_grid
+from tidem.gas.limits import fastest_inlet
 from tidem.gas.species import M_O2
+from tidem.kernels.reactions import (CHAR, ENTHALPY_OUT, ESCAPED, GONE, HEAT_RELEASED, LATENT,  # noqa: F401
+                                     MASS_ESCAPED, O2_USED, POLY, REACTED, SUBL)
+from tidem.scene.schedule import lowest, peak
 
 R_GAS = 8.314462618  # J/(mol K)
 M_C = 0.012011  # kg/mol
@@ -81,7 +83,8 @@ def reaction_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarr
                     errs.append(f"{key}: a step of {dt:.3g} s grows a particle's mass by {100 * per_s * dt:.2g} % "
                                 f"(limit {100 * MAX_FRACTION:g} %); use numerics.dt <= {MAX_FRACTION / per_s:.3g}")
             continue  # heat: its explicit limit is the temperature step
-        temps = [heat.initial_temperature, gas.inlet_temperature or 0.0, gas.initial_temperature or 0.0]
+        temps = [heat.initial_temperature, lowest(gas.inlet_temperature) or 0.0, peak(gas.inlet_temperature) or 0.0,
+                 gas.initial_temperature or 0.0]
         temps += [g.temperature or 0.0 for g in scene.particles]
         if r.type == "char_combustion":
             ox = gas.oxygen
@@ -118,7 +121,7 @@ def reaction_step_checks(scene, dt: float, radius: np.ndarray, density: np.ndarr
 
 
 def _max_speed(gas) -> float:
-    return max([gas.inlet_velocity] + [nz.velocity for nz in gas.nozzles]) / gas.min_voidage
+    return fastest_inlet(gas) / gas.min_voidage
 
 
 def reaction_summary(solver) -> dict:

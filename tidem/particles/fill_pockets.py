@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from tidem.gas.geometry import spans_period
-from tidem.gas.mesh import cell_index, cut_links
 from tidem.gas.grid_graph import interior_links, reached
+from tidem.gas.mesh import cell_index, cut_links
 from tidem.kernels.gas_grid import GasGrid
 
 MAX_VOXELS = 4_000_000  # as the gas cut's sub-cells (`gas.mesh.MAX_SUBCELLS`)

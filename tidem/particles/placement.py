@@ -17,9 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tidem.particles.fill_pockets import joined_to_top
-from tidem.walls.mesh_geometry import inside_mesh, point_mesh_distance
 from tidem.particles.overlaps import min_image
 from tidem.scene.sizes import largest_parcel, parcel_count
+from tidem.walls.mesh_geometry import inside_mesh, point_mesh_distance
 
 POCKETS = (" and out of the pockets a grain could not reach from the domain's top (skip_pockets; a closed "
            "vessel, such as a drum, is all pocket: fill it with 'inside_mesh')")

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from tidem.io.vtp import read_vtp_triangles
+from tidem.scene.schedule import Schedule, VectorSchedule
 from tidem.walls.mesh_walls import MeshWall
 
 GREY = "#b8bcc2"  # brushed steel
@@ -41,8 +42,14 @@ def load_meshes(run_dir: Path, geometry: list[dict]) -> list[MeshWall]:
         points, triangles, _data = read_vtp_triangles(path)
         out.append(MeshWall(name=g["name"], vertices=np.array(points, dtype=float), triangles=np.array(triangles),
                             material="", temperature=g.get("T"), center=tuple(g["center"]), axis=tuple(g["axis"]),
-                            speed=g["speed"], velocity=tuple(g["velocity"]), source=g.get("source", "")))
+                            speed=g["speed"], velocity=tuple(g["velocity"]), source=g.get("source", ""),
+                            schedules=read_schedules(g.get("schedules", {}))))
     return out
+
+
+def read_schedules(tables: dict) -> dict:
+    """A mesh's schedules as run.json holds them (temperature, speed: numbers; velocity: vectors)."""
+    return {key: (VectorSchedule if key == "velocity" else Schedule).model_validate(table) for key, table in tables.items()}
 
 
 def towards_camera(view: str) -> np.ndarray:
@@ -99,11 +106,11 @@ def add_meshes(pl, style, time: float) -> None:
         if surface is None:
             continue
         heated = style.field == "temperature" and mesh.temperature is not None
-        pl.add_mesh(surface, color=mesh_colour(mesh.temperature, style), smooth_shading=True,
+        pl.add_mesh(surface, color=mesh_colour(mesh.temperature_at(time), style), smooth_shading=True,
                     split_sharp_edges=True, ambient=0.45 if heated else 0.3, diffuse=0.6,
                     specular=0.15 if heated else 0.5, specular_power=30.0)
         line = mesh_surface(mesh, time, style.bounds, style.view, cut=True)
         if line is not None:  # the cut's edge: the outline of a wall seen edge-on (a drum along its axis)
             pl.add_mesh(line, color=EDGE, line_width=6)
             if heated:  # its temperature's colour inside the dark edge
-                pl.add_mesh(line, color=mesh_colour(mesh.temperature, style), line_width=3)
+                pl.add_mesh(line, color=mesh_colour(mesh.temperature_at(time), style), line_width=3)

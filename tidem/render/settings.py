@@ -23,6 +23,8 @@ import math
 
 import numpy as np
 
+from tidem.scene.schedule import lowest, peak
+
 CONTACTS_MAX = 12.0
 
 
@@ -40,6 +42,9 @@ def default_range(model, field: str) -> tuple[float, float]:
         temps = list(model.temperature0) if model.temperature0 is not None else []
         temps += [s["T"] for s in model.planes + model.tubes if s.get("T") is not None]
         temps += [m.temperature for m in model.meshes if m.temperature is not None]
+        temps += [f(s["T_schedule"]) for s in model.planes + model.tubes if s.get("T_schedule") for f in (lowest, peak)]
+        temps += [f(m.schedules["temperature"]) for m in model.meshes if "temperature" in m.schedules
+                  for f in (lowest, peak)]
         return _widened(float(min(temps, default=0.0)), float(max(temps, default=0.0)))
     if field == "speed":
         g = np.asarray(scene.domain.gravity, dtype=float)
@@ -48,7 +53,8 @@ def default_range(model, field: str) -> tuple[float, float]:
         fall = math.sqrt(2.0 * g_norm * abs(float(extent @ g)) / g_norm) if g_norm > 0 else 0.0
         speeds = [float(np.linalg.norm(model.v0, axis=1).max(initial=0.0)), fall]
         speeds += [float(np.linalg.norm(p["vel"])) for p in model.planes]
-        speeds += [float(np.linalg.norm(m.velocity)) + abs(m.speed) * m.reach_from_axis() for m in model.meshes]
+        speeds += [peak(p["speed_schedule"]) for p in model.planes if p.get("speed_schedule") is not None]
+        speeds += [m.max_speed() for m in model.meshes]
         return _widened(0.0, max(speeds))
     if field == "radius":
         return _widened(float(model.radius.min()), float(model.radius.max()))

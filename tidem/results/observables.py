@@ -29,6 +29,7 @@ from tidem.heat.drum_heat import mesh_heat_rows
 from tidem.results.hydrodynamics import MIN_PERIODS, bed_top, dominant_frequency, second_half
 from tidem.results.tables import alpha_profile, contact_times, impact_heat_rows, packet_model_rows
 from tidem.scene.observable_names import NEEDS
+from tidem.walls.surfaces import plate_z
 
 
 @dataclass
@@ -74,8 +75,7 @@ def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | No
     floor = model.scene.domain.min[2]
     for p in model.planes:
         if p["name"] == "outlet plate":
-            t0, t1 = p["t"]
-            floor = p["p0"][2] + p["vel"][2] * (min(max(solver.t, t0), t1) - t0)
+            floor = plate_z(p, solver.t)
     means = alpha_profile(model, solver)[1]
     ident = S.ident.to_numpy()[active]  # index in the scene's arrays (`tidem.particles.storage_order`)
     x, radius = S.x.to_numpy()[active], S.radius.to_numpy()[active]

@@ -19,10 +19,10 @@ from types import SimpleNamespace
 import numpy as np
 import taichi as ti
 
-from tidem.results.hydrodynamics import BED_TOP_PERCENTILE, bed_top
 from tidem.kernels.diagnostics import make_sample_kernel
 from tidem.kernels.field_copy import FieldCopier
 from tidem.kernels.ordered import in_order
+from tidem.results.hydrodynamics import BED_TOP_PERCENTILE, bed_top
 
 HEIGHT_BINS = 1 << 14
 

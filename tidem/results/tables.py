@@ -11,10 +11,11 @@ import math
 import numpy as np
 
 from tidem.heat.impact_conduction import hertz_impact, quasi_static_impact_heat, sun_chen_impact_heat
-from tidem.kernels import contact_laws as cl
 from tidem.heat.packet_model import packet_alpha
-from tidem.walls.surfaces import angle_bin_area, is_heated
+from tidem.kernels import contact_laws as cl
 from tidem.particles.timestep import hertz_contact_time
+from tidem.scene.schedule import value_at
+from tidem.walls.surfaces import angle_bin_area, is_heated
 
 
 def head_on_partners(model):
@@ -85,7 +86,7 @@ def packet_model_rows(model, tube_means: list[dict]) -> list[dict]:
     rows = []
     for row in tube_means:
         tube = model.scene.tubes[row["tube"]]
-        ref = packet_alpha(tube_diameter=tube.diameter, speed=outlet.speed,
+        ref = packet_alpha(tube_diameter=tube.diameter, speed=value_at(outlet.speed, model.t_end),
                            particle_diameter=float(2.0 * (model.radius[first] / model.coarse_grain[first]).mean()),
                            solid_density=mat.density,
                            solid_conductivity=mat.conductivity, heat_capacity=mat.heat_capacity,

@@ -177,6 +177,9 @@ def restore(solver, meta: dict, arrays: dict) -> None:
     if solver.gas is not None:
         for k, v in s["gas"].items():
             setattr(solver.gas, k, v)
+        solver.gas.sync_from_fields()  # the scheduled inlet and wall temperatures the host keeps
+    if solver.conditions is not None:
+        solver.conditions.sync_from_fields()
     if solver.pourer is not None:
         p = solver.pourer
         p._next_check = s["pour"]["next_check"]

@@ -78,8 +78,8 @@ def writable(out_dir: Path, option: str) -> None:
 
 def fits_on_disk(loaded, model, out_dir: Path, frames: bool) -> None:
     """InputError when the output folder's disk cannot hold what the run will write (`tidem.runner.output_size`)."""
-    from tidem.sim.memory import format_bytes
     from tidem.runner.output_size import output_bytes
+    from tidem.sim.memory import format_bytes
 
     n, need = output_bytes(model, frames)
     free = shutil.disk_usage(out_dir).free

@@ -15,14 +15,14 @@ from typing import Callable
 import numpy as np
 import taichi as ti
 
-from tidem.runner import checkpoint
-from tidem.results.averaging import write_averages
-from tidem.sim.model import Model
-from tidem.runtime.phases import SAMPLE_EVERY, clock
-from tidem.runner.output_size import cadence
 from tidem.render.plots import read_series
+from tidem.results.averaging import write_averages
+from tidem.runner import checkpoint
 from tidem.runner.output import Output
+from tidem.runner.output_size import cadence
 from tidem.runner.summary import observed, summary
+from tidem.runtime.phases import SAMPLE_EVERY, clock
+from tidem.sim.model import Model
 from tidem.sim.solver import RunError, Solver
 
 

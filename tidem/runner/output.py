@@ -12,18 +12,19 @@ from typing import Callable
 
 import numpy as np
 
-from tidem.results.averaging import AverageRecorder
-from tidem.results.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
+from tidem.heat.reactions import reaction_summary
 from tidem.io.mesh_output import MeshOutput
 from tidem.io.timeseries import TimeSeries
 from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.kernels.field_copy import FieldCopier
-from tidem.sim.model import Model
+from tidem.results.averaging import AverageRecorder
+from tidem.results.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
+from tidem.results.tables import alpha_profile, tube_alpha_columns
 from tidem.runner.output_size import cadence
 from tidem.runner.reaction_output import ReactionLog
-from tidem.heat.reactions import reaction_summary
-from tidem.results.tables import alpha_profile, tube_alpha_columns
+from tidem.sim.model import Model
 from tidem.sim.solver import Solver
+from tidem.walls.surfaces import plate_z
 
 SNAPSHOT_FIELDS = ("active", "ident", "x", "radius", "v", "w", "ncontact", "T")  # T: with heat
 WRITES_AHEAD = 2  # snapshots the writer thread may be behind the run loop (each held in memory meanwhile)
@@ -195,8 +196,7 @@ class Output:
             self.reactions.sample(solver)
         for p in self.model.planes:
             if p["name"] == "outlet plate":
-                t0, t1 = p["t"]
-                row["plate_z_m"] = p["p0"][2] + p["vel"][2] * (min(max(solver.t, t0), t1) - t0)
+                row["plate_z_m"] = plate_z(p, solver.t)
         self.series.append(row)
 
     def write_alpha_profile(self, solver: Solver) -> None:

@@ -39,7 +39,8 @@ def output_bytes(model, frames: bool) -> tuple[int, int]:
     if f.gas:
         per_snapshot += math.prod(gas_grid(model.scene).cells) * GAS_BYTES_PER_CELL
     per_snapshot += sum(len(m.vertices) * (3 * 8 + 8 * (m.temperature is not None)) + len(m.triangles) * (3 * 8 + 8)
-                        for m in model.meshes if m.moving)  # points (temperature), connectivity and offsets
+                        for m in model.meshes if m.moving or "temperature" in m.schedules)  # points (temperature),
+    # connectivity and offsets of each mesh written at every snapshot
     per_snapshot = per_snapshot * OVERHEAD + FRAME_BYTES * frames
     snap_dt, series_dt = cadence(model.scene, model.t_end)
     steps = math.ceil(model.t_end / model.dt)

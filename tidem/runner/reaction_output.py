@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.heat.reactions import ESCAPED, GONE, MASS_ESCAPED, REACTED
 from tidem.gas.species import M_O2
+from tidem.heat.reactions import ESCAPED, GONE, MASS_ESCAPED, REACTED
 
 TRACKED = 20
 HOTTEST = 10

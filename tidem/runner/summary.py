@@ -7,23 +7,29 @@ from __future__ import annotations
 
 import numpy as np
 
+from tidem.io.mesh_output import mesh_geometry
+from tidem.render.settings import render_settings
 from tidem.results import observables as obs
 from tidem.results.hydrodynamics import bed_weight_per_area
-from tidem.io.mesh_output import mesh_geometry
+from tidem.scene.schedule import is_scheduled, start
 from tidem.sim.model import Model
-from tidem.render.settings import render_settings
 from tidem.sim.solver import Solver
 from tidem.version import __version__
 
 
 def distributor_parts(scene) -> list[dict]:
-    """The gas distributor for the frames: the background inflow, then each nozzle."""
+    """The gas distributor for the frames: the background inflow, then each nozzle (velocity at t = 0,
+    and its schedule where the scene gives one)."""
     gas = scene.gas
     if gas is None:
         return []
     parts = [{"background": True, "velocity": gas.inlet_velocity}]
     parts += [{"x": list(nz.x), "y": list(nz.y) if nz.y is not None else None, "velocity": nz.velocity}
               for nz in gas.nozzles]
+    for part in parts:
+        if is_scheduled(part["velocity"]):
+            part["schedule"] = part["velocity"].model_dump()
+            part["velocity"] = start(part["velocity"])
     return parts
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from tidem.scene.schedule import is_scheduled, lowest
 from tidem.scene.schema import Scene
 from tidem.scene.sizes import largest_diameter, max_diameter
 
@@ -10,14 +11,16 @@ AXES = "xyz"
 
 def scene_temperatures(scene: Scene, fluxes: bool = False) -> list[tuple[str, float | None]]:
     """(key, value) of every temperature the domain, particle groups, walls, tubes and meshes set (None
-    where unset); with `fluxes` each wall's and tube's heat_flux after its temperatures."""
+    where unset; a schedule's lowest value); with `fluxes` each wall's and tube's heat_flux after its
+    temperatures."""
     temps = [("domain.wall_temperature", scene.domain.wall_temperature)]
     temps += [(f"particles[{i}].temperature", g.temperature) for i, g in enumerate(scene.particles)]
     for name, items in (("walls", scene.walls), ("tubes", scene.tubes)):
         temps += [(f"{name}[{i}].temperature", w.temperature) for i, w in enumerate(items)]
         if fluxes:
             temps += [(f"{name}[{i}].heat_flux", w.heat_flux) for i, w in enumerate(items)]
-    return temps + [(f"meshes[{i}].temperature", m.temperature) for i, m in enumerate(scene.meshes)]
+    temps += [(f"meshes[{i}].temperature", m.temperature) for i, m in enumerate(scene.meshes)]
+    return [(key, lowest(value)) for key, value in temps]
 
 
 def heat_checks(scene: Scene) -> list[str]:
@@ -56,7 +59,7 @@ def celsius_notes(scene: Scene) -> list[str]:
         return []
     temps = [("heat.initial_temperature", scene.heat.initial_temperature), *scene_temperatures(scene)]
     if scene.gas is not None:
-        temps += [("gas.inlet_temperature", scene.gas.inlet_temperature),
+        temps += [("gas.inlet_temperature", lowest(scene.gas.inlet_temperature)),
                   ("gas.initial_temperature", scene.gas.initial_temperature)]
     return [f"{key} = {value:g} K; temperatures are in kelvin ({value:g} °C would be {value + 273.15:g} K)"
             for key, value in temps if value is not None and value < COLD]
@@ -121,6 +124,11 @@ def gas_checks(scene: Scene) -> list[str]:
             r = getattr(nz, key)
             if r is not None and (r[0] < dom.min[a] or r[1] > dom.max[a]):
                 errs.append(f"gas.nozzles[{i}].{key}: {list(r)} reaches outside the domain {dom.min[a]:g}..{dom.max[a]:g} m")
+    scheduled = [key for key, value in [("gas.inlet_velocity", gas.inlet_velocity)] +
+                 [(f"gas.nozzles[{i}].velocity", nz.velocity) for i, nz in enumerate(gas.nozzles)] if is_scheduled(value)]
+    if gas.inlet_ramp > 0 and scheduled:
+        errs.append(f"gas.inlet_ramp: {scheduled[0]} is a schedule, which holds the ramp itself; remove inlet_ramp "
+                    "and start the schedule with the ramp, e.g. times = [0.0, 0.2], values = [0.0, 0.8]")
     if scene.heat is None and (gas.inlet_temperature is not None or gas.initial_temperature is not None):
         errs.append("gas: gas temperatures need a [heat] table (add '[heat]' to switch heat transfer on)")
     return errs
@@ -151,8 +159,12 @@ def profile_checks(scene: Scene) -> list[str]:
     starts = {g.temperature or scene.heat.initial_temperature for g in scene.particles}
     if len(starts) > 1:
         errs.append(f"{key} needs every particle to start at one temperature (got {sorted(starts)} K)")
-    if scene.gas.nozzles or scene.gas.inlet_ramp > 0:
-        errs.append(f"{key} needs a uniform gas inlet switched on at once; remove gas.nozzles and gas.inlet_ramp")
+    if scene.gas.nozzles or scene.gas.inlet_ramp > 0 or is_scheduled(scene.gas.inlet_velocity):
+        errs.append(f"{key} needs a uniform, steady gas inlet switched on at once; remove gas.nozzles, "
+                    "gas.inlet_ramp and any schedule of gas.inlet_velocity")
+    if is_scheduled(scene.gas.inlet_temperature):
+        errs.append(f"{key} compares with Schumann's model of a steady inlet temperature; give "
+                    "gas.inlet_temperature as one number")
     return errs
 
 
@@ -273,7 +285,7 @@ def mesh_checks(scene: Scene) -> list[str]:
             if g.inside_mesh is not None and g.inside_mesh >= len(scene.meshes)]
     if scene.gas is not None:
         for k, m in enumerate(scene.meshes):
-            if (m.rotation is not None and m.rotation.speed != 0.0) or any(m.velocity):
+            if mesh_moves(m):
                 errs.append(f"meshes[{k}]: a moving mesh in a scene with [gas] is not supported (the gas grid is cut "
                             "by the meshes once, at the start); remove its rotation/velocity (surface_velocity is "
                             "allowed) or the [gas] table")
@@ -284,6 +296,12 @@ def mesh_checks(scene: Scene) -> list[str]:
                             "the length across the flow [m]: set it (the outer diameter of a tube drawn as a mesh), "
                             "or set gas.tube_convection = \"none\"")
     return errs
+
+
+def mesh_moves(mesh) -> bool:
+    """Whether a [[meshes]] entry rotates or translates at any time (a schedule counts, even one of zeros)."""
+    speed = mesh.rotation.speed if mesh.rotation is not None else 0.0
+    return is_scheduled(speed) or speed != 0.0 or is_scheduled(mesh.velocity) or any(mesh.velocity)
 
 
 def cross_checks(scene: Scene) -> list[str]:

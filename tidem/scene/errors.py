@@ -91,7 +91,7 @@ def _model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
     cls: Any = root
     for part in loc[:-1]:
         cls = _unwrap(cls)
-        if isinstance(part, int) or cls is None:
+        if isinstance(part, int) or cls is None or part.startswith("["):  # an index, or a union's tag
             continue
         if isinstance(cls, type) and issubclass(cls, BaseModel):
             field = cls.model_fields.get(part)
@@ -107,13 +107,16 @@ def _model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
 
 
 def _unwrap(cls: Any) -> Any:
-    """Strip Optional/list/union wrappers down to a single model class where there is one."""
-    for _ in range(4):
+    """Strip Optional/list/union/Annotated wrappers down to a single model class where there is one."""
+    for _ in range(6):
         origin = typing.get_origin(cls)
-        if origin in (list, tuple):
+        if origin is typing.Annotated:
+            cls = typing.get_args(cls)[0]
+        elif origin in (list, tuple):
             cls = typing.get_args(cls)[0]
         elif origin in (typing.Union, getattr(__import__("types"), "UnionType")):
-            models = [a for a in typing.get_args(cls) if isinstance(a, type) and issubclass(a, BaseModel)]
+            args = [typing.get_args(a)[0] if typing.get_origin(a) is typing.Annotated else a for a in typing.get_args(cls)]
+            models = [a for a in args if isinstance(a, type) and issubclass(a, BaseModel)]
             if len(models) == 1:
                 cls = models[0]
             else:

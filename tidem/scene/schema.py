@@ -12,6 +12,7 @@ from typing import Literal
 
 from pydantic import Field, StrictBool, StrictInt, field_validator, model_validator
 
+from tidem.scene.schedule import NonNegativeSchedule, ScheduledNumber, ScheduledPositive, ScheduledVec3, scheduled
 from tidem.scene.schema_gas import Gas, Reaction
 from tidem.scene.types import Box, Fraction, NonNegative, Number, Positive, Strict, Vec3
 
@@ -26,7 +27,7 @@ class Domain(Box):
     walls: Literal["auto", "none"] | list[Side] = "auto"
     wall_material: str | None = None
     wall_friction: NonNegative | None = None
-    wall_temperature: Positive | None = None
+    wall_temperature: ScheduledPositive | None = None
     gravity: Vec3 = (0.0, 0.0, -9.81)
 
     def wall_sides(self) -> list[str]:
@@ -160,7 +161,7 @@ class Wall(Strict):
     material: str | None = None
     friction: NonNegative | None = None
     velocity: Vec3 = (0.0, 0.0, 0.0)
-    temperature: Positive | None = None
+    temperature: ScheduledPositive | None = None
     heat_flux: Positive | None = None
     foil_heat_capacity: Positive = 200.0
 
@@ -187,7 +188,7 @@ class Tube(Strict):
     diameter: Positive
     material: str | None = None
     friction: NonNegative | None = None
-    temperature: Positive | None = None
+    temperature: ScheduledPositive | None = None
     heat_flux: Positive | None = None
     foil_heat_capacity: Positive = 200.0
     foil_conductance: NonNegative = 0.0
@@ -204,7 +205,7 @@ class MeshRotation(Strict):
 
     center: Vec3
     axis: Vec3
-    speed: Number
+    speed: ScheduledNumber
 
 
 class Mesh(Strict):
@@ -217,10 +218,10 @@ class Mesh(Strict):
     offset: Vec3 = (0.0, 0.0, 0.0)
     material: str | None = None
     friction: NonNegative | None = None
-    temperature: Positive | None = None
+    temperature: ScheduledPositive | None = None
     convection_length: Positive | None = None
     rotation: MeshRotation | None = None
-    velocity: Vec3 = (0.0, 0.0, 0.0)
+    velocity: ScheduledVec3 = (0.0, 0.0, 0.0)
     surface_velocity: Vec3 = (0.0, 0.0, 0.0)
 
     @model_validator(mode="after")
@@ -237,7 +238,7 @@ class Outlet(Strict):
     """How the bed leaves the domain."""
 
     type: Literal["moving_plate", "recycle", "sink"]
-    speed: Positive | None = None
+    speed: scheduled(Positive, NonNegativeSchedule) | None = None
     start: NonNegative = 0.0
     height: Number | None = None
     stop_height: Number | None = None

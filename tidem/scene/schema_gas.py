@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, StrictBool, StrictInt, model_validator
 
+from tidem.scene.schedule import ScheduledNonNegative, ScheduledPositive
 from tidem.scene.types import NonNegative, Number, Positive, Strict
 
 
@@ -15,7 +16,7 @@ class Nozzle(Strict):
 
     x: tuple[Number, Number]
     y: tuple[Number, Number] | None = None
-    velocity: NonNegative
+    velocity: ScheduledNonNegative
 
     @model_validator(mode="after")
     def _ranges(self):
@@ -43,10 +44,10 @@ class Gas(Strict):
     viscosity: Positive = 1.8e-5
     heat_capacity: Positive = 1005.0
     cell_size: Positive
-    inlet_velocity: NonNegative = 0.0
+    inlet_velocity: ScheduledNonNegative = 0.0
     inlet_ramp: NonNegative = 0.0
     nozzles: list[Nozzle] = []
-    inlet_temperature: Positive | None = None
+    inlet_temperature: ScheduledPositive | None = None
     initial_temperature: Positive | None = None
     drag: Literal["gidaspow", "di_felice"] = "gidaspow"
     voidage: Literal["layered", "cell"] = "layered"

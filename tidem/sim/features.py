@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from tidem.kernels import contact_laws as cl
+from tidem.scene.schedule import is_scheduled
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,8 @@ class Features:
     sink: bool = False  # an outlet that removes particles below a height (counted)
     n_meshes: int = 0  # triangle-mesh walls ([[meshes]])
     moving_meshes: bool = False  # a mesh that rotates or translates (its triangles moved every step)
+    scheduled_motion: bool = False  # a mesh whose rotation speed or velocity follows a schedule (host-set pose)
+    scheduled_plate: bool = False  # an outlet plate whose speed follows a schedule (host-set position)
 
     @property
     def float_bytes(self) -> int:
@@ -115,4 +118,6 @@ def scene_features(scene, n_planes: int, n_tubes: int, meshes=()) -> Features:
         sink=scene.outlet is not None and scene.outlet.type == "sink",
         n_meshes=len(meshes) if contacts else 0,
         moving_meshes=contacts and any(m.moving for m in meshes),
+        scheduled_motion=contacts and any(m.schedules.keys() - {"temperature"} for m in meshes),
+        scheduled_plate=scene.outlet is not None and is_scheduled(scene.outlet.speed),
     )

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from tidem.walls.mesh_bins import MESH_SLOTS
 from tidem.sim.model import Model
+from tidem.walls.mesh_bins import MESH_SLOTS
+from tidem.walls.surfaces import moves
 
 QUIET_MARGIN = 1e-4  # of the skin: the rounding margin of the quiet partners' reach (kernels/contact.py)
 
@@ -48,5 +49,5 @@ def mesh_settings(model: Model) -> tuple[int, int, int, float, float, bool] | No
 def static_surfaces(model: Model) -> int:
     """Bit s set for each surface (planes, then tubes) that never moves: the contact kernel skips it
     for particles out of its reach at the last neighbour build."""
-    still = [not any(p["vel"]) for p in model.planes] + [True] * len(model.tubes)
+    still = [not moves(p) for p in model.planes] + [True] * len(model.tubes)
     return sum(1 << s for s, fixed in enumerate(still) if fixed)

@@ -20,12 +20,12 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from tidem.sim.features import scene_features
 from tidem.gas.geometry import gas_grid, layers_for, voidage_layers
-from tidem.walls.mesh_bins import mesh_field_bytes
+from tidem.particles.storage_order import sorts_storage
 from tidem.scene.averaging_layout import cell_grid
 from tidem.scene.sizes import largest_parcel, max_diameter, parcel_count
-from tidem.particles.storage_order import sorts_storage
+from tidem.sim.features import scene_features
+from tidem.walls.mesh_bins import mesh_field_bytes
 
 RUNTIME_BYTES = 172 * 2**20  # peak RSS of a run less fields and host arrays (measured, float64 bed of 20k)
 HOST_BYTES_PER_PARTICLE = 1050  # numpy arrays of the scene and of the read-backs (measured, 20k vs 126k)

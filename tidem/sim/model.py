@@ -10,27 +10,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tidem.particles.contact_params import hysteretic_floor_errors, parameter_tables
-from tidem.sim.features import Features, scene_features
 from tidem.gas.geometry import mesh_gas_cut
 from tidem.gas.limits import gas_step_checks
 from tidem.gas.mesh import GasCut
 from tidem.heat.limits import heat_step_errors
+from tidem.heat.reactions import reaction_constants, reaction_index, reaction_step_checks
 from tidem.kernels.geometry import Grid, slab_axis_for
-from tidem.sim.memory import (HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, default_neighbors, field_bytes, memory_refusal,
-                          scene_refusal)
-from tidem.walls.mesh_bins import MeshTable, mesh_table
-from tidem.walls.mesh_load import load_mesh_walls, tube_mesh_overlaps
-from tidem.walls.mesh_walls import pass_through_errors
+from tidem.particles.contact_params import hysteretic_floor_errors, parameter_tables
 from tidem.particles.overlaps import initial_overlaps
 from tidem.particles.placement import place_groups
-from tidem.heat.reactions import reaction_constants, reaction_index, reaction_step_checks
+from tidem.particles.timestep import TimeScales, contact_time_step, impact_speed
 from tidem.scene.averaging_layout import AveragingLayout, averaging_layout
 from tidem.scene.errors import SceneError
 from tidem.scene.load import LoadedScene
 from tidem.scene.sizes import max_diameter
+from tidem.sim.features import Features, scene_features
+from tidem.sim.memory import (HOST_BYTES_PER_PARTICLE, RUNTIME_BYTES, default_neighbors, field_bytes, memory_refusal,
+                              scene_refusal)
+from tidem.walls.mesh_bins import MeshTable, mesh_table
+from tidem.walls.mesh_load import load_mesh_walls, tube_mesh_overlaps
+from tidem.walls.mesh_walls import pass_through_errors
 from tidem.walls.surfaces import AXES, is_heated, surfaces
-from tidem.particles.timestep import TimeScales, contact_time_step, impact_speed
 
 
 @dataclass

@@ -24,31 +24,31 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
-from tidem.sim.kernel_settings import mesh_settings, quiet_bounds, quiet_margin, static_surfaces
+from tidem.gas.phase import GasError, GasPhase
 from tidem.kernels.averaging import make_averaging_kernel
 from tidem.kernels.broadphase import make_neighbor_builder
-from tidem.kernels.contact_laws import LINEAR
-from tidem.kernels.reactions import make_reaction_kernel
 from tidem.kernels.contact import make_force_kernel
+from tidem.kernels.contact_laws import LINEAR
 from tidem.kernels.diagnostics import make_energy_kernel, make_health_kernel
 from tidem.kernels.field_copy import FieldCopier
-from tidem.results.particle_stats import ParticleStats
 from tidem.kernels.integrate import make_integrators
 from tidem.kernels.mesh_contact import make_mesh_mover
 from tidem.kernels.ordered import in_order
 from tidem.kernels.outlet import make_recycle_kernel, make_sink_kernel
+from tidem.kernels.reactions import make_reaction_kernel
 from tidem.kernels.storage_sort import make_storage_permuter
-from tidem.gas.phase import GasError, GasPhase
-from tidem.walls.mesh_bins import MESH_SLOTS, bin_triangles
-from tidem.sim.model import Model
-from tidem.runtime.phases import PhaseTimer, clock
 from tidem.particles.pour import Pourer
+from tidem.particles.storage_order import SCRATCH, sort_storage, sorts_storage
+from tidem.results.particle_stats import ParticleStats
+from tidem.runtime.phases import PhaseTimer, clock
 from tidem.runtime.startup import hot
+from tidem.sim.conditions import Conditions
+from tidem.sim.kernel_settings import mesh_settings, quiet_bounds, quiet_margin, static_surfaces
+from tidem.sim.model import Model
+from tidem.sim.solver_reads import TallyReads
 from tidem.sim.state import State, allocate
 from tidem.sim.state_fill import load_bins
-from tidem.sim.solver_reads import TallyReads
-from tidem.particles.storage_order import SCRATCH, sort_storage, sorts_storage
-
+from tidem.walls.mesh_bins import MESH_SLOTS, bin_triangles
 
 # The small fields the host reads at health checks and time-series samples, copied all at once (`kernels/field_copy.py`:
 # one launch in the calling thread, against a parallel launch per field for to_numpy())
@@ -93,7 +93,11 @@ class Solver(TallyReads):
         self.mesh_t_binned = 0.0  # time the moving meshes were last binned (`rebuild`)
         if f.moving_meshes:
             self._move_meshes = hot(make_mesh_mover(self.state, [
-                (m.moving, m.center, m.axis, m.speed, m.velocity) for m in model.meshes]))
+                (m.moving, m.center, m.axis, m.speed, m.velocity, bool(m.schedules.keys() - {"temperature"}))
+                for m in model.meshes]))
+        self.conditions = Conditions(model, self.state, self.gas)  # scheduled temperatures and mesh motions
+        if not self.conditions.active:
+            self.conditions = None
         self._average = None
         if f.averaging:
             a = model.averaging
@@ -220,6 +224,8 @@ class Solver(TallyReads):
         self.steps += 1
         need = self.state.max_disp[None] > self._rebuild_disp2
         self._drift_done = False
+        if self.conditions is not None:
+            self.conditions.apply(self.t)
         if self._move_meshes is not None:
             self._move_meshes(self.t)
             need |= self._meshes_moved() > 0.5 * self.model.skin

@@ -66,6 +66,7 @@ from types import SimpleNamespace
 
 import taichi as ti
 
+from tidem.heat.reactions import KIND_IDS, N_SUMS
 from tidem.kernels import contact_laws as cl
 from tidem.kernels.averaging import channels
 from tidem.kernels.broadphase import QUIET_GROUPS, scan_blocks
@@ -73,10 +74,9 @@ from tidem.kernels.contact import BLOCKS
 from tidem.kernels.geometry import slab_layout
 from tidem.kernels.ordered import in_order
 from tidem.kernels.reactions import booked_slots
-from tidem.walls.mesh_bins import MESH_SLOTS
 from tidem.sim.model import Model
-from tidem.heat.reactions import KIND_IDS, N_SUMS
 from tidem.sim.state_fill import fill_heat, fill_particles, fill_surfaces
+from tidem.walls.mesh_bins import MESH_SLOTS
 
 
 class State(SimpleNamespace):
@@ -187,6 +187,9 @@ def _place_contact_fields(p: _Placer, model: Model) -> None:
     p.place((NT,), "tube_c", n=3)
     p.place((NT,), "tube_mask", n=3)
     p.place((NT,), "tube_r")
+    if feat.scheduled_plate:  # an outlet plate on a speed schedule: its shift from p0 and velocity, host-set
+        p.place((len(model.planes),), "plane_shift", n=3)
+        p.place((len(model.planes),), "plane_u", n=3)
     p.S.max_disp = ti.field(p.fp)
     p.S.flips = ti.field(ti.i32)
     p.S.sort_tail = ti.field(ti.i32)  # a GPU storage sort's count of the particles in order so far
@@ -211,6 +214,8 @@ def _place_mesh_fields(p: _Placer, model: Model) -> None:
     p.place((model.grid.n_cells + 1,), "mbin_start", ti.i32)
     p.place((tab.bin_capacity,), "mbin_tri", ti.i32)
     p.place((len(model.meshes), 4), "mesh_motion", n=3)
+    if model.features.scheduled_motion:
+        p.place((len(model.meshes),), "mesh_pose", n=4)
     p.per_particle((N,), "mc_n", ti.i32)
     p.per_particle((N,), "mc_flat", ti.i32)
     p.per_particle((N, tab.candidates), "mc_tri", ti.i32)

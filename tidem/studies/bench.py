@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tidem.sim.memory import peak_resident_bytes
 from tidem.particles.placement import spatial_key
+from tidem.sim.memory import peak_resident_bytes
 
 BED = Path(__file__).resolve().parent.parent / "benchmarks" / "bed10k.npz"
 TILES = {10000: (1, 1), 50000: (5, 1), 200000: (5, 4), 1000000: (10, 10)}
@@ -84,8 +84,8 @@ def run_case(n: int, precision: str, steps: int, threads: int, bed: str | None =
     from tidem.runtime.startup import ensure_taichi
 
     ensure_taichi(arch, precision, threads)
-    from tidem.sim.model import build_model
     from tidem.scene.load import validate
+    from tidem.sim.model import build_model
     from tidem.sim.solver import Solver
 
     x, extent = tiled_bed(n, Path(bed) if bed else None)

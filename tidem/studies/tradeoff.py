@@ -55,11 +55,11 @@ def variants(vary: list[tuple[str, list[str]]], fixed: list[str] = ()) -> list[V
 
 def run_variant(scene: str, overrides: list[str], out_dir: str, threads: int) -> dict:
     """Run one variant (in a Dask worker process); return its figures or its error."""
-    from tidem.sim.model import build_model
     from tidem.runner.loop import run
     from tidem.runtime.startup import ensure_taichi
     from tidem.scene.errors import SceneError
     from tidem.scene.load import load
+    from tidem.sim.model import build_model
 
     try:
         loaded = load(scene, overrides)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tidem.scene.schedule import is_scheduled, start
 from tidem.walls.mesh_geometry import facet_sag, triangle_areas, weld
 from tidem.walls.mesh_walls import MeshWall
 
@@ -90,10 +91,13 @@ def _fixed_surfaces(scene, default_material: str, k: int, m) -> dict:
     if rot is not None:
         a = np.asarray(rot.axis, float)
         axis = tuple(float(c) for c in a / np.linalg.norm(a))
+    keys = {"temperature": m.temperature, "speed": rot.speed if rot else 0.0, "velocity": m.velocity}
     return dict(name=f"meshes[{k}]", material=m.material or default_material, friction=m.friction,
-                temperature=m.temperature, convection_length=m.convection_length, center=tuple(rot.center) if rot else (0.0, 0.0, 0.0), axis=axis,
-                speed=float(rot.speed) if rot else 0.0, velocity=tuple(m.velocity),
-                surface_velocity=tuple(m.surface_velocity))
+                temperature=start(m.temperature), convection_length=m.convection_length,
+                center=tuple(rot.center) if rot else (0.0, 0.0, 0.0), axis=axis,
+                speed=float(start(keys["speed"])), velocity=tuple(float(c) for c in start(m.velocity)),
+                surface_velocity=tuple(m.surface_velocity),
+                schedules={key: value for key, value in keys.items() if is_scheduled(value)})
 
 
 def load_mesh(scene, scene_path, default_material: str, k: int) -> tuple[MeshWall | None, list[str]]:
@@ -157,10 +161,10 @@ def load_mesh(scene, scene_path, default_material: str, k: int) -> tuple[MeshWal
 def _outside_domain(scene, wall: MeshWall) -> str:
     """Why the mesh is wholly outside the domain box, or '' (a translating mesh may enter later and
     is not refused; a rotating one is judged by the ball it sweeps about its rotation centre)."""
-    if any(wall.velocity):
+    if wall.translates:
         return ""
     lo, hi = wall.vertices.min(axis=0), wall.vertices.max(axis=0)
-    if wall.speed != 0.0:
+    if wall.rotates:
         c = np.asarray(wall.center, float)
         reach = float(np.max(np.linalg.norm(wall.vertices - c, axis=1)))
         lo, hi = c - reach, c + reach
