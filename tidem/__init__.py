@@ -26,9 +26,9 @@ import os as _os
 _os.environ.setdefault("TI_SKIP_VERSION_CHECK", "ON")
 _os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")
 
-from tidem.api import (InputError, OutputLost, RunFailed, RunFolder, RunInterrupted, SceneError,  # noqa: E402
-                       load_scene, read_run, run)
+from tidem.api import (Controls, InputError, OutputLost, RunFailed, RunFolder, RunInterrupted,  # noqa: E402
+                       SceneError, load_scene, read_run, run)
 from tidem.version import __version__  # noqa: E402
 
-__all__ = ["load_scene", "run", "read_run", "RunFolder", "RunFailed", "RunInterrupted", "SceneError", "InputError",
+__all__ = ["load_scene", "run", "read_run", "Controls", "RunFolder", "RunFailed", "RunInterrupted", "SceneError", "InputError",
            "OutputLost", "__version__"]

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from tidem.runner.controls import Controls
 from tidem.runner.launch import InputError, OutputLost
 from tidem.scene.errors import SceneError
 
@@ -70,14 +71,15 @@ def load_scene(path_or_name: str | Path | None = None, sets: dict[str, Any] | li
 
 
 def run(scene, out: str | Path | None = None, *, render: bool = False, plots: bool = True, progress: bool = True,
-        t_end: float | None = None, smoke: bool = False, arch: str = "cpu", resume: str | Path | None = None
-        ) -> "RunFolder":
+        t_end: float | None = None, smoke: bool = False, arch: str = "cpu", resume: str | Path | None = None,
+        controls: Controls | None = None) -> "RunFolder":
     """Run a scene (a `load_scene` result, or a file or shipped name as `load_scene` takes it) as
     `tidem scene` does, into `out` (default renders/<scene name>; with `resume`, the folder whose
     checkpoint it continues from); returns the finished run folder. `render` renders frames and
     the movie (a background process), `plots` writes plots/*.png, `progress` shows the progress
     bar and the lines `tidem scene` prints; `t_end`, `smoke` and `arch` are the CLI's --t-end,
-    --smoke and --arch. Raises SceneError, InputError, RunFailed, RunInterrupted or OutputLost (module
+    --smoke and --arch. `controls` (a `tidem.Controls`) steers the run while it goes: another thread
+    puts events in it (`set`, `pause`, `resume`, `step`; docs/steering.md). Raises SceneError, InputError, RunFailed, RunInterrupted or OutputLost (module
     docstring)."""
     from tidem.runner import launch
     from tidem.scene.load import LoadedScene
@@ -87,7 +89,7 @@ def run(scene, out: str | Path | None = None, *, render: bool = False, plots: bo
     prepared = launch.prepare(loaded, None if out is None else Path(out), None if resume is None else Path(resume),
                               smoke, t_end, arch, frames=render, say=say)
     try:
-        result = launch.execute(prepared, progress=progress, render=render, plots=plots, say=say)
+        result = launch.execute(prepared, progress=progress, render=render, plots=plots, say=say, controls=controls)
     except launch.RenderInterrupted as exc:
         raise RunInterrupted(str(exc), RunFolder(prepared.out_dir)) from None
     message = launch.outcome_message(result)

@@ -1,5 +1,6 @@
 """The live view under Xvfb: a screenshot of the X screen shows the particles in their
-colours at their places; space pauses the run; without a display the run goes on headless.
+colours at their places; keys and sliders put events in the run's queue; without a display the run
+goes on headless.
 
 Xvfb (Debian's `xvfb`) is required in CI (TIDEM_REQUIRE_XVFB=1, set by .ci/run); a local run
 without it skips these tests with a reason.
@@ -117,30 +118,41 @@ def test_window_shows_hot_and_cold_particles_in_place(xvfb, monkeypatch, solver_
     assert between.tolist() == [255, 255, 255], "background between the spheres"
 
 
-def test_space_pauses_and_resumes(xvfb, monkeypatch, solver_for):
+def test_keys_and_sliders_put_events_in_the_run_queue(xvfb, monkeypatch, solver_for, tmp_path):
+    """Space pauses (again: resumes), n steps, f and v show the next field and view, + raises the picked
+    control by a twentieth of its slider's span: each an event in the run's queue
+    (`tidem.runner.controls`), which the run loop applies (tests/runner/test_steering.py)."""
     monkeypatch.setenv("DISPLAY", xvfb)
     import taichi as ti
 
     from tidem.render.live import LiveView
     from tidem.render.settings import render_settings
+    from tidem.runner.controls import Controls
+    from tidem.runner.steering import Steering
 
-    solver = solver_for(two_spheres())
+    raw = two_spheres()
+    raw["domain"].update(walls=["z-"], wall_temperature=350.0)
+    solver = solver_for(raw)
+    controls = Controls()
+    steering = Steering(solver.model, solver, tmp_path, controls, raw)
     view = LiveView(solver.model, render_settings(solver.model))
-    space = type("Event", (), {"key": ti.GUI.SPACE})()
-    presses = iter([[space]] + [[]] * 5 + [[space]])
-    polls = []
-
-    def events(*_filter):
-        polls.append(view.paused)
-        return next(presses, [])
-
-    monkeypatch.setattr(view.gui, "get_events", events)
+    view.attach(controls, steering)
+    presses = [[type("Event", (), {"key": key})() for key in (ti.GUI.SPACE, "n", "f", "v", "+")]]
+    monkeypatch.setattr(view.gui, "get_events", lambda *_filter: presses.pop(0) if presses else [])
     try:
         view.update(solver)
+        events = controls.take()
+        steering.paused = True  # the run loop applied the pause: space now resumes
+        view._last = -1e9
+        presses.append([type("Event", (), {"key": ti.GUI.SPACE})()])
+        view.update(solver, paused=True)
+        events += controls.take()
     finally:
         view.close()
-    assert polls == [False] + [True] * 6, "held while paused until the second space"
-    assert not view.paused and view.paused_s >= 0.25
+    kinds = [(e.kind, e.key, e.value) for e in events]
+    assert kinds[:4] == [("pause", "", None), ("step", "", None), ("show", "", "speed"), ("look", "", "side")]
+    assert kinds[4][:2] == ("set", "domain.wall_temperature") and kinds[4][2] > 350.0
+    assert kinds[5] == ("resume", "", None)
 
 
 def test_scene_view_runs_with_a_window_and_without_a_display(xvfb, monkeypatch, tmp_path):

@@ -187,18 +187,20 @@ def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:
     return kinds
 
 
-def inlet_map(gg: GasGrid, gas, t: float = 0.0) -> np.ndarray:
+def inlet_map(gg: GasGrid, gas, t: float = 0.0, velocities: dict | None = None) -> np.ndarray:
     """Superficial inlet velocity [m/s] of each bottom face at time t (nozzles override the background;
-    each velocity at its scheduled value where the scene gives a schedule)."""
+    each velocity at its scheduled value where the scene gives a schedule). `velocities`: {scene key:
+    velocity or schedule} in place of the scene's (`tidem.gas.limits.inlet_velocities`)."""
+    velocities = velocities or {}
     xc = gg.lo[0] + (np.arange(gg.cells[0]) + 0.5) * gg.h[0]
     yc = gg.lo[1] + (np.arange(gg.cells[1]) + 0.5) * gg.h[1]
     X, Y = np.meshgrid(xc, yc, indexing="ij")
-    u = np.full(X.shape, value_at(gas.inlet_velocity, t))
-    for nz in gas.nozzles:
+    u = np.full(X.shape, value_at(velocities.get("gas.inlet_velocity", gas.inlet_velocity), t))
+    for i, nz in enumerate(gas.nozzles):
         inside = (X >= nz.x[0]) & (X <= nz.x[1])
         if nz.y is not None:
             inside &= (Y >= nz.y[0]) & (Y <= nz.y[1])
-        u[inside] = value_at(nz.velocity, t)
+        u[inside] = value_at(velocities.get(f"gas.nozzles[{i}].velocity", nz.velocity), t)
     return u
 
 

@@ -21,7 +21,7 @@ import taichi as ti
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas.fields import allocate_gas_fields
 from tidem.gas.geometry import convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter, voidage_layers
-from tidem.gas.limits import MAX_COURANT
+from tidem.gas.limits import MAX_COURANT, inlet_velocities
 from tidem.gas.open_volume import open_volumes
 from tidem.gas.species import M_O2, o2_mass_fraction
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
@@ -70,7 +70,9 @@ class GasPhase:
         self.solid, self.kinds, self.cut = gas_walls(gg, model.tubes, model.meshes, model.gas_cut)
         self.tubes = model.tubes
         self.heated_meshes = [k for k, m in enumerate(model.meshes) if m.temperature is not None]
-        self.inlet = inlet_map(gg, gas, 0.0)
+        self.velocities = dict(inlet_velocities(gas))  # {scene key: velocity or schedule}, `install` replaces one
+        self.scheduled_inlet = any(is_scheduled(u) for u in self.velocities.values())
+        self.inlet = inlet_map(gg, gas, 0.0, self.velocities)
         walls = convection_walls(gg, model.tubes, model.meshes, self.cut) \
             if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
@@ -90,7 +92,6 @@ class GasPhase:
         k_gas = scene.heat.gas_conductivity if self.heat else 0.026
         self.t_in_key = (gas.inlet_temperature or scene.heat.initial_temperature) if self.heat else 0.0
         self.t_in = float(start(self.t_in_key))
-        self.scheduled_inlet = any(is_scheduled(u) for u in [gas.inlet_velocity, *(nz.velocity for nz in gas.nozzles)])
         wall_grain, wall_umf = 0.0, 0.0
         if self.walls and gas.tube_convection == "martin_nilles":
             wall_grain = grain_sauter_diameter(model)
@@ -128,7 +129,7 @@ class GasPhase:
         self._deposit(self.n)
         G.eps_old.copy_from(G.eps)
         # start from the inlet flow (at its ramped value) spread over the bed
-        uz = np.where(self.kinds[2] == CLOSED, 0.0, start(gas.inlet_velocity) * self.inlet_scale)
+        uz = np.where(self.kinds[2] == CLOSED, 0.0, start(self.velocities["gas.inlet_velocity"]) * self.inlet_scale)
         G.u[2].from_numpy(uz)
 
     def set_inlet(self, t: float) -> None:
@@ -136,12 +137,22 @@ class GasPhase:
         ramp = self.gas.inlet_ramp
         scale = min(t / ramp, 1.0) if ramp > 0 else 1.0
         if self.scheduled_inlet:
-            inlet = inlet_map(self.gg, self.gas, t)
+            inlet = inlet_map(self.gg, self.gas, t, self.velocities)
             if t > 0.0 and np.array_equal(inlet, self.inlet):
                 return
             self.inlet = inlet
         self.G.inlet.from_numpy(self.inlet * scale)
         self.inlet_scale = scale
+
+    def install(self, key: str, schedule) -> None:
+        """From the next gas step on, the inlet velocity or temperature `key` follows `schedule`."""
+        if key in self.velocities:
+            self.velocities[key] = schedule
+            self.scheduled_inlet = True
+        elif key == "gas.inlet_temperature" and self.heat:
+            self.t_in_key = schedule
+        else:
+            raise ValueError(f"{key}: not a gas condition this run can change")
 
     def sync_from_fields(self) -> None:
         """After a checkpoint's fields are restored: take the scheduled inlet and wall temperatures the
@@ -175,7 +186,7 @@ class GasPhase:
         start = clock()
         if self.inlet_scale < 1.0 or self.scheduled_inlet:  # ramping up, or on a schedule
             self.set_inlet(t)
-        if self.heat and is_scheduled(self.t_in_key):
+        if self.heat and is_scheduled(self.t_in_key):  # (a schedule installed while the run goes counts too)
             self.set_inlet_temperature(t)
         self._deposit(self.n)
         rate = self._couple(self.n)

@@ -1,12 +1,20 @@
-"""Live view: a Taichi GUI window that shows the run while it goes on (`tidem scene --view`).
+"""Live view: a Taichi GUI window that shows the run while it goes on (`tidem scene --view`), with
+its live controls.
 
 Particles are drawn as discs projected on the plane of the scene's render view (front: x
 right, z up; side: y right, z up; top: x right, y up; iso falls back to front), the nearest
 drawn last, coloured by the run's field with the colour map and fixed range of its frames
 (`tidem.render.settings`). Tubes (grey, with their periodic images), the domain outline, a
-colour bar and the simulated time are drawn too. Space pauses and resumes the run; Esc or
-closing the window ends the view and the run goes on headless. The window is redrawn at most
-`MAX_FPS` times per second of wall time, so drawing costs the run little.
+colour bar and the simulated time are drawn too. The window is redrawn at most `MAX_FPS` times
+per second of wall time, so drawing costs the run little.
+
+Controls (`attach`): one slider per condition the run can change (`tidem.runner.steering.controls_for`:
+the inlet velocity, heated tubes', walls' and meshes' temperatures, rotating meshes' speeds, the
+outlet speed); moving one puts a `set` event in the run's queue. Keys: space pauses and resumes,
+n (or the right arrow) takes one step while paused, f shows the next field, v the next view
+(front, side, top), up and down pick a control and + and - raise or lower it by a twentieth of its
+slider's span. Esc or closing the window ends the view and the run goes on headless. The last
+message of the run (a refused value) is shown under the colour bar.
 """
 
 from __future__ import annotations
@@ -19,14 +27,21 @@ import time
 import numpy as np
 
 from tidem.render.frames import FIELDS, field_values, tube_images
+from tidem.render.settings import default_range
 
 MAX_FPS = 10
 MAX_PLOT = (960, 720)  # largest plot area [px]
 MARGIN = 16  # px around the domain
 TOP = 32  # px above the domain, for the time stamp
 BAR = 120  # px of colour-bar panel right of the plot
+PANEL = 210  # px right of the colour bar where Taichi draws the sliders (top right of the window)
+SLIDER_H = 40  # px a slider takes
 # (horizontal axis, vertical axis, depth axis, depth sign of the camera side) as in frames.place_camera
 VIEW_AXES = {"front": (0, 2, 1, -1), "side": (1, 2, 0, 1), "top": (0, 1, 2, 1)}
+KEYS_HELP = ["space: pause / resume", "n: one step (paused)", "f: next field", "v: next view",
+             "up/down: pick a slider", "+ / -: move it"]
+FIELD_CYCLE = ("temperature", "speed", "group", "radius", "contacts")
+VIEW_CYCLE = ("front", "side", "top")
 
 
 def display_problem() -> str | None:
@@ -57,28 +72,55 @@ def colour_table(colormap: str, n: int = 256) -> np.ndarray:
 
 
 class LiveView:
-    """The window; `update(solver)` after every step draws when due and holds while paused."""
+    """The window; `update(solver)` draws when due and turns the window's keys and sliders into events."""
 
     def __init__(self, model, settings: dict):
         import taichi as ti
 
         self.ti = ti
         self.model = model
-        self.field = settings["field"]
-        self.clim = tuple(settings["range"])
-        self.table = colour_table(settings.get("colormap") or FIELDS[self.field][1])
+        self.settings = settings
+        self.table = self.clim = None
+        self.field = ""
+        self._use_field(settings["field"], settings.get("range"), settings.get("colormap"))
         dom = model.scene.domain
         self.lo, self.hi = np.asarray(dom.min, float), np.asarray(dom.max, float)
-        self.h, self.v, self.d, self.sign = VIEW_AXES.get(settings.get("view", "front"), VIEW_AXES["front"])
-        ext = self.hi - self.lo
-        self.scale = min((MAX_PLOT[0] - 2 * MARGIN) / ext[self.h], (MAX_PLOT[1] - 2 * MARGIN) / ext[self.v])
-        self.plot_w = int(ext[self.h] * self.scale) + 2 * MARGIN
-        self.res = (self.plot_w + BAR, int(ext[self.v] * self.scale) + MARGIN + TOP)
+        self.view = settings.get("view", "front") if settings.get("view", "front") in VIEW_AXES else "front"
+        self._use_view(self.view)
+        self.res = (self.plot_w + BAR + PANEL, max(self.plot_h, 8 * SLIDER_H))
         self.gui = ti.GUI(f"tidem: {model.name}", res=self.res, background_color=0xFFFFFF)
-        self.paused = False
-        self.paused_s = 0.0
+        self.controls = self.steering = None
+        self.sliders: list[tuple] = []  # (Control, slider widget, the value last sent)
+        self.picked = 0
         self._last = -np.inf
         self._scene = None
+
+    def _use_field(self, field: str, clim=None, colormap=None) -> None:
+        self.field = field
+        self.clim = tuple(clim) if clim else default_range(self.model, field)
+        self.table = colour_table(colormap or FIELDS[field][1])
+
+    def _use_view(self, view: str) -> None:
+        """The view's axes and scale; the window keeps the size of the first view's plot."""
+        self.view = view
+        self.h, self.v, self.d, self.sign = VIEW_AXES[view]
+        ext = self.hi - self.lo
+        if not hasattr(self, "plot_w"):
+            self.scale = min((MAX_PLOT[0] - 2 * MARGIN) / ext[self.h], (MAX_PLOT[1] - 2 * MARGIN) / ext[self.v])
+            self.plot_w = int(ext[self.h] * self.scale) + 2 * MARGIN
+            self.plot_h = int(ext[self.v] * self.scale) + MARGIN + TOP
+        else:
+            self.scale = min((self.plot_w - 2 * MARGIN) / ext[self.h], (self.plot_h - MARGIN - TOP) / ext[self.v])
+
+    def attach(self, controls, steering) -> None:
+        """Offer the run's live controls (`tidem.runner.steering`): sliders, and keys that put events in
+        `controls`."""
+        self.controls, self.steering = controls, steering
+        for control in steering.table.values():
+            widget = self.gui.slider(f"{control.label} [{control.unit}]", control.low, control.high,
+                                     step=(control.high - control.low) / 200 or 1.0)
+            widget.value = control.value
+            self.sliders.append((control, widget, control.value))
 
     def to_window(self, p: np.ndarray) -> np.ndarray:
         """Plane coordinates (n, 3) [m] -> window coordinates (n, 2) in [0, 1]."""
@@ -122,6 +164,10 @@ class LiveView:
         self._draw_bar()
         if note:
             gui.text(note, ((self.plot_w + 8) / self.res[0], 0.1), font_size=14, color=0xC00000)
+        if self.controls is not None:
+            x = (self.plot_w + BAR + 8) / self.res[0]
+            for row, line in enumerate(KEYS_HELP + ([f"+/- now: {self.sliders[self.picked][0].label}"] if self.sliders else [])):
+                gui.text(line, (x, 0.3 - 0.03 * row), font_size=13, color=0x404040)
         gui.show()
 
     def _mask_outside(self, corners: np.ndarray) -> None:
@@ -163,19 +209,48 @@ class LiveView:
         gui.text(FIELDS[self.field][0], (x0 - 10 / w, 0.93), font_size=14, color=0x000000)
 
     def _keys(self) -> None:
-        """Space toggles the pause; Esc or the window's close button ends the view."""
-        ti = self.ti
+        """Keys and sliders to events (module docstring); Esc or the window's close button ends the view."""
+        ti, c = self.ti, self.controls
         for e in self.gui.get_events(ti.GUI.PRESS):
-            if e.key == ti.GUI.SPACE:
-                self.paused = not self.paused
-            elif e.key == ti.GUI.ESCAPE:
+            if e.key == ti.GUI.ESCAPE:
                 self.close()
                 return
-        if not self.gui.running:
+            if c is None:
+                continue
+            if e.key == ti.GUI.SPACE and self.steering.paused:
+                c.resume()
+            elif e.key == ti.GUI.SPACE:
+                c.pause()
+            elif e.key in ("n", ti.GUI.RIGHT):
+                c.step()
+            elif e.key == "f":
+                c.show(_next(FIELD_CYCLE, self.field))
+            elif e.key == "v":
+                c.look(_next(VIEW_CYCLE, self.view))
+            elif e.key in (ti.GUI.UP, ti.GUI.DOWN) and self.sliders:
+                self.picked = (self.picked + (1 if e.key == ti.GUI.DOWN else -1)) % len(self.sliders)
+            elif e.key in ("+", "=", "-") and self.sliders:
+                control, widget, _sent = self.sliders[self.picked]
+                nudge = (control.high - control.low) / 20
+                widget.value = widget.value + (nudge if e.key != "-" else -nudge)
+        if self.gui is not None and not self.gui.running:
             self.close()
+            return
+        for i, (control, widget, sent) in enumerate(self.sliders):
+            if widget.value != sent:
+                c.set(control.key, widget.value)
+                self.sliders[i] = (control, widget, widget.value)
 
-    def update(self, solver) -> None:
-        """Redraw when due; while paused, keep the window alive until space is pressed again."""
+    def _follow_display(self) -> None:
+        """The field and view the controls asked for."""
+        asked = self.steering.display if self.steering is not None else {}
+        if asked.get("field", self.field) != self.field:
+            self._use_field(asked["field"])
+        if asked.get("view", self.view) != self.view:
+            self._use_view(asked["view"])
+
+    def update(self, solver, paused: bool = False) -> None:
+        """Redraw when due (at most MAX_FPS a second); `paused`: the run is held by the controls."""
         if self.gui is None:
             return
         now = time.perf_counter()
@@ -185,16 +260,18 @@ class LiveView:
         self._keys()
         if self.gui is None:
             return
+        self._follow_display()
         self.capture(solver)
-        self.draw()
-        if self.paused:
-            while self.paused and self.gui is not None:
-                self.draw("paused (space)")
-                time.sleep(0.05)
-                self._keys()
-            self.paused_s += time.perf_counter() - now
+        notes = ["paused: space resumes, n steps"] if paused else []
+        if self.controls is not None and self.controls.messages:
+            notes.append(self.controls.messages[-1])
+        self.draw(" | ".join(notes))
 
     def close(self) -> None:
         if self.gui is not None:
             self.gui.close()
             self.gui = None
+
+
+def _next(cycle: tuple, now: str) -> str:
+    return cycle[(cycle.index(now) + 1) % len(cycle)] if now in cycle else cycle[0]

@@ -11,6 +11,9 @@
 - `solver.png`: whether the run can be trusted, not what it found: the gas pressure solver's
   iterations, residual and velocity divergence, the largest overlap against the scene's limit;
 - `timeseries.png`: every column of timeseries.csv, one panel each (the raw columns).
+
+Every time axis marks each change of the run's conditions (a point of a scene schedule, a live
+change: `change_marks`) with a dotted line, labelled on the figure's top panel.
 """
 
 from __future__ import annotations
@@ -64,9 +67,43 @@ def running_mean(t: np.ndarray, y: np.ndarray, window: float) -> np.ndarray:
     return np.where(n > 0, (cum[hi] - cum[lo]) / np.maximum(n, 1), np.nan)
 
 
-def _finish(fig, path: Path) -> Path:
+def change_marks(run: dict) -> list[tuple[float, str]]:
+    """(time, label) of each change of the run's conditions: the points of the scene's schedules
+    (after t = 0) and each live change (run.json's `steering`)."""
+    marks = []
+
+    def walk(node, key):
+        if isinstance(node, dict) and {"times", "values"} <= node.keys():
+            marks.extend((float(t), key) for t in node["times"] if t > 0)
+        elif isinstance(node, dict):
+            for k, v in node.items():
+                walk(v, f"{key}.{k}" if key else k)
+        elif isinstance(node, list):
+            for i, v in enumerate(node):
+                walk(v, f"{key}[{i}]")
+
+    walk(run.get("scene_echo", {}), "")
+    marks += [(c["time_s"], f"{c['key']} = {c['value']:g}") for c in run.get("steering", [])]
+    return sorted(marks)
+
+
+def _mark_changes(fig, marks: list[tuple[float, str]]) -> None:
+    """A dashed line at each change on every time axis, labelled on the top one."""
+    timed = [ax for ax in fig.axes if ax.get_xlabel() == "Time [s]"]
+    axes = [ax for ax in fig.axes if any(ax is t or ax.get_shared_x_axes().joined(ax, t) for t in timed)]
+    top = min(axes, key=lambda ax: -ax.get_position().y1, default=None)
+    for t, label in marks:
+        for ax in axes:
+            ax.axvline(t, color="0.4", ls=":", lw=1)
+        top.annotate(label, (t, 1.0), xycoords=("data", "axes fraction"), rotation=90, fontsize=7, va="top",
+                     ha="right", color="0.3")
+
+
+def _finish(fig, path: Path, marks: list[tuple[float, str]] = ()) -> Path:
     import matplotlib.pyplot as plt
 
+    if marks:
+        _mark_changes(fig, marks)
     for ax in fig.axes:
         ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -75,7 +112,7 @@ def _finish(fig, path: Path) -> Path:
     return path
 
 
-def plot_energy(data: dict, path: Path) -> Path:
+def plot_energy(data: dict, path: Path, marks=()) -> Path:
     """Kinetic and rotational energy (log scale), the change of potential energy since the start,
     and contacts per particle."""
     import matplotlib.pyplot as plt
@@ -93,10 +130,10 @@ def plot_energy(data: dict, path: Path) -> Path:
     axes[2].plot(t, data["coordination"], lw=1.0)
     axes[2].set_ylabel(LABELS["coordination"])
     axes[2].set_xlabel("Time [s]")
-    return _finish(fig, path)
+    return _finish(fig, path, marks)
 
 
-def plot_hydrodynamics(data: dict, run: dict, path: Path) -> Path:
+def plot_hydrodynamics(data: dict, run: dict, path: Path, marks=()) -> Path:
     """Pressure drop with its second-half mean and the bed weight per area, its spectrum over
     the second half with the dominant frequency (module docstring), and the bed height."""
     import matplotlib.pyplot as plt
@@ -146,7 +183,7 @@ def plot_hydrodynamics(data: dict, run: dict, path: Path) -> Path:
         ax.set_xlabel("Time [s]")
         ax.set_ylabel("Bed height [mm]")
         ax.legend(fontsize=8, loc="lower right")
-    return _finish(fig, path)
+    return _finish(fig, path, marks)
 
 
 def _heat_label(key: str) -> str:
@@ -158,7 +195,7 @@ def _heat_label(key: str) -> str:
     return key
 
 
-def plot_heat(data: dict, path: Path) -> Path:
+def plot_heat(data: dict, path: Path, marks=()) -> Path:
     """Heat flow of each heated surface and each heated tube's alpha (thin) with their running
     mean over a twentieth of the run (thick); the particles' and the gas's mean temperature and
     the hottest particle's."""
@@ -190,10 +227,10 @@ def plot_heat(data: dict, path: Path) -> Path:
         twin.set_ylabel("Hottest particle [K] (dotted)", color="C3")
         twin.yaxis.get_major_formatter().set_useOffset(False)
     ax.set_xlabel("Time [s]")
-    return _finish(fig, path)
+    return _finish(fig, path, marks)
 
 
-def plot_solver(data: dict, run: dict, path: Path) -> Path:
+def plot_solver(data: dict, run: dict, path: Path, marks=()) -> Path:
     """The diagnostics: the gas pressure solver's iterations, residual and divergence (with a
     gas), and the largest overlap against numerics.max_overlap, where the run stops."""
     import matplotlib.pyplot as plt
@@ -225,10 +262,10 @@ def plot_solver(data: dict, run: dict, path: Path) -> Path:
             ax.legend(fontsize=8, loc="best")
     axes[-1, 0].set_xlabel("Time [s]")
     fig.suptitle("Solver diagnostics: can the run be trusted?", fontsize=10)
-    return _finish(fig, path)
+    return _finish(fig, path, marks)
 
 
-def plot_raw(data: dict, path: Path) -> Path:
+def plot_raw(data: dict, path: Path, marks=()) -> Path:
     """Every column of timeseries.csv but time and step, one panel each."""
     import matplotlib.pyplot as plt
 
@@ -245,16 +282,17 @@ def plot_raw(data: dict, path: Path) -> Path:
     for ax in axes[-1]:
         ax.set_xlabel("Time [s]")
     fig.suptitle("Raw columns of timeseries.csv", fontsize=10)
-    return _finish(fig, path)
+    return _finish(fig, path, marks)
 
 
 def plot_series(data: dict, run: dict, out_dir: Path) -> list[Path]:
     """The figures of the module docstring that the run's columns allow; returns their files."""
-    written = [plot_energy(data, out_dir / "energy.png")]
+    marks = change_marks(run)
+    written = [plot_energy(data, out_dir / "energy.png", marks)]
     if "gas_pressure_drop_Pa" in data:
-        written.append(plot_hydrodynamics(data, run, out_dir / "hydrodynamics.png"))
+        written.append(plot_hydrodynamics(data, run, out_dir / "hydrodynamics.png", marks))
     if any(k.endswith("_heat_W") or k.endswith("_alpha_W_m2K") for k in data) or "T_mean_K" in data:
-        written.append(plot_heat(data, out_dir / "heat.png"))
-    written.append(plot_solver(data, run, out_dir / "solver.png"))
-    written.append(plot_raw(data, out_dir / "timeseries.png"))
+        written.append(plot_heat(data, out_dir / "heat.png", marks))
+    written.append(plot_solver(data, run, out_dir / "solver.png", marks))
+    written.append(plot_raw(data, out_dir / "timeseries.png", marks))
     return written

@@ -36,10 +36,12 @@ RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtim
 # flows by every pass that conducts, the reactions' gas book and their totals' rows (rbook) by every reaction step, `sums` by every energy sum and, in the gas, `sums` and the direct solve's band by every pressure
 # solve, the rest by every neighbour build): not kept. The quiet partners' groups (nbr_touch, nbr_end, nbr_gap) are not kept
 # either: a restored run evaluates every listed pair until its next build, which gives the same bits (kernels/pair_contact.py).
+# Nor the host-set poses of scheduled meshes and the outlet plate (`tidem.sim.conditions`), set anew before each step's
+# forces: a run with live controls resumes from a checkpoint of one without, and the other way round.
 TRANSIENT = ("conduct", "gas_book", "rbook", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
              "cell_count", "cell_start", "cell_fill", "cell_block", "sort_tail", "pcell", "sorted_idx", "sums", "worst", "worst_at",
              "nbr_touch", "nbr_end",
-             "nbr_gap", "band", "band_y", "surf_rate_block", "tube_bin_block")
+             "nbr_gap", "band", "band_y", "surf_rate_block", "tube_bin_block", "mesh_pose", "plane_shift", "plane_u")
 
 
 class CheckpointError(RuntimeError):
@@ -178,8 +180,7 @@ def restore(solver, meta: dict, arrays: dict) -> None:
         for k, v in s["gas"].items():
             setattr(solver.gas, k, v)
         solver.gas.sync_from_fields()  # the scheduled inlet and wall temperatures the host keeps
-    if solver.conditions is not None:
-        solver.conditions.sync_from_fields()
+    solver.conditions.sync_from_fields()
     if solver.pourer is not None:
         p = solver.pourer
         p._next_check = s["pour"]["next_check"]

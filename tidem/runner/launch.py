@@ -169,10 +169,11 @@ def renderer(out_dir: Path, render: bool, say: Say = to_stderr):
 
 
 def execute(prepared: Prepared, progress: bool = True, render: bool = True, plots: bool = True, view=None,
-            frame_progress=None, say: Say = to_stderr):
+            frame_progress=None, say: Say = to_stderr, controls=None):
     """Run a prepared run (`tidem.runner.loop.run`) with the background renderer when `render`, then
     (unless interrupted) the last frames and the movie, and the plots when `plots`; returns the
-    run loop's RunResult. `view` is a live view, `frame_progress(done, total)` is called while the
+    run loop's RunResult. `view` is a live view, `controls` the event queue of live controls
+    (`tidem.runner.steering.Controls`), `frame_progress(done, total)` is called while the
     last frames render. Ctrl-C while they render raises RenderInterrupted."""
     from tidem.runner.loop import run
 
@@ -180,7 +181,7 @@ def execute(prepared: Prepared, progress: bool = True, render: bool = True, plot
     with renderer(out_dir, render, say) as background:
         try:
             result = run(prepared.model, out_dir, progress=progress, on_snapshot=background, view=view,
-                         resume=prepared.checkpoint)
+                         resume=prepared.checkpoint, controls=controls)
         except OSError as exc:
             inside = bool(exc.filename) and Path(exc.filename).resolve().is_relative_to(out_dir.resolve())
             if not out_dir.is_dir() or inside or exc.errno in (errno.ENOSPC, errno.EROFS, errno.EDQUOT):

@@ -23,6 +23,9 @@ from tidem.runner.output_size import cadence
 from tidem.runner.summary import observed, summary
 from tidem.runtime.phases import SAMPLE_EVERY, clock
 from tidem.sim.model import Model
+from tidem.runner.controls import Controls
+from tidem.runner.steering import WATCHED_STEPS, Steering
+from tidem.sim.conditions import make_steerable
 from tidem.sim.solver import RunError, Solver
 
 
@@ -67,13 +70,16 @@ def _next_after(t: float, every: float) -> float:
 
 
 def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | None = None,
-        on_snapshot: Callable[[Path], None] | None = None, view=None, resume: tuple[dict, dict] | None = None
-        ) -> RunResult:
+        on_snapshot: Callable[[Path], None] | None = None, view=None, resume: tuple[dict, dict] | None = None,
+        controls: Controls | None = None) -> RunResult:
     """Run `model` to its end time, writing to `out_dir`.
 
     `on_snapshot` is called with each snapshot file once it is on disk (the background
     renderer starts on the first); `view` (a `tidem.render.live.LiveView`) is updated after
-    every step. Time the view spends paused is not counted in wall_s. `resume` is a
+    every few steps. `controls` (a `tidem.runner.steering.Controls`) is the event queue of live
+    controls, emptied every few steps (`tidem.runner.steering.Steering`); the rotating meshes and the
+    outlet plate are then compiled with host-set motion (`tidem.sim.conditions.make_steerable`).
+    Time spent paused is not counted in wall_s. `resume` is a
     checkpoint (`tidem.runner.checkpoint.load`) of this scene in `out_dir` to continue from.
     Checkpoints are written every `output.checkpoint_wall_s` of wall time (and every
     `output.checkpoint_interval` of simulated time if set), at the end, and when SIGINT or
@@ -81,6 +87,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     here (none passed) is released at the end.
     """
     loop = resume[0]["loop"] if resume else None
+    if view is not None and controls is None:
+        controls = Controls()  # the window's keys pause and step the run through the queue
     out = Output(out_dir, model, loop)
     if resume is None:
         out.write_summary(summary(model, None, "starting", 0.0))
@@ -89,6 +97,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     stop = StopRequest()
     try:
         with stop:  # Ctrl-C or SIGTERM while the solver is built: the run stops before its first step
+            if controls is not None and solver is None:
+                make_steerable(model)
             solver = solver or Solver(model)
             if resume is not None:
                 checkpoint.restore(solver, *resume)
@@ -99,6 +109,12 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         data = summary(model, None, "failed", 0.0, str(exc))
         out.write_summary(data)
         return RunResult(status="failed", out_dir=Path(out_dir), steps=0, wall_s=0.0, message=str(exc), summary=data)
+    steering = None
+    if controls is not None:
+        steering = Steering(model, solver, out.dir, controls, model.loaded.raw, model.loaded.source)
+        if view is not None:
+            view.attach(controls, steering)
+    paused_s = 0.0
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     scene = model.scene
@@ -134,7 +150,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             state["averages"] = out.averages.state()
         if out.reactions is not None:
             state["reaction_rows"] = out.reactions.rows
-        checkpoint.save(out.dir, solver, state, model.loaded.raw)
+        checkpoint.save(out.dir, solver, state, steering.raw if steering is not None and steering.changes
+                        else model.loaded.raw)
 
     solver.timer.reset()
     solver.timer.sample_every = 0 if ti.lang.impl.current_cfg().arch == ti.cpu else SAMPLE_EVERY  # runtime/phases.py
@@ -147,8 +164,12 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
     def output_due(t: float) -> bool:
         """Whether the loop writes or shows anything at the end of a step at time t."""
         tol = 1e-12 * t_end
-        return (view is not None or t >= next_series - tol or t >= next_snap - tol or bool(ckpt_every and t >= next_ckpt)
+        return (t >= next_series - tol or t >= next_snap - tol or bool(ckpt_every and t >= next_ckpt)
                 or (out.profiles is not None and out.profiles.due(t)) or (out.averages is not None and out.averages.due(t)))
+
+    def due(every: int) -> int:
+        """Steps to the next output, at most `every` (the progress bar's cadence, or a watched run's)."""
+        return solver.steps_until(output_due, every, total_steps)
 
     try:
         with bar, stop:
@@ -167,13 +188,19 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
                     out.averages.record(solver)
                 if view is not None:
                     view.update(solver)
+                if steering is not None:
+                    steering.poll()
+                    paused_s += steering.hold(view, solver, stop)
                 lap("output", start)
                 if solver.steps >= total_steps:
                     break
                 if stop.signal is not None:  # asked during the set-up
                     raise KeyboardInterrupt
                 in_step = True
-                solver.advance(solver.steps_until(output_due, 50, total_steps))
+                if steering is not None:
+                    solver.advance(steering.next_steps(due))
+                else:
+                    solver.advance(due(WATCHED_STEPS if view is not None else 50))
                 in_step = False
                 start = begin_output()
                 out.poll()
@@ -209,7 +236,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
             write_averages(out.dir, model, solver)
         bed_profiles = out.write_bed_profiles(solver)
         lap("output", start)
-        wall = wall_before + time.perf_counter() - t0 - (view.paused_s if view is not None else 0.0)
+        wall = wall_before + time.perf_counter() - t0 - paused_s
         series = read_series(out.series.path) if out.series.path.is_file() else {}
         counts = series.get("particles")
         data = summary(model, solver, status, wall, message,
@@ -218,6 +245,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         data["profile"] = solver.timer.table(solver.steps - steps0)
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])
+        if steering is not None:
+            data["steering"] = [{"time_s": t, "key": key, "value": value} for t, key, value in steering.changes]
         if status == "finished":
             data.update(observed(model, solver, series, bed_profiles))
         if out.reactions is not None:  # per reaction group, and flat in observables for tradeoff/sweep

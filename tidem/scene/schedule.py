@@ -259,3 +259,28 @@ def summary_line(key: str, schedule: Schedule | VectorSchedule) -> str:
     span = f"{schedule.times[0]:g}..{schedule.times[-1]:g} s" if len(schedule.times) > 1 else f"{schedule.times[0]:g} s"
     modes = schedule.between if isinstance(schedule.between, str) else "/".join(schedule.between)
     return f"schedule: {key} {modes}s over {len(schedule.times)} point(s), {span}: {values}"
+
+
+def hold_from(current: float | Schedule, t_last: float, t_new: float, value: float) -> Schedule:
+    """The schedule of a key that followed `current` (a number or a schedule) up to the step at `t_last` and
+    holds `value` from the next step, at `t_new` > t_last, on: the points of `current` before t_new (a ramp
+    still under way at t_last ends there, at its value then), then `value` held. A run that follows it from
+    the start takes `current`'s values at every step up to t_last (to rounding inside a ramp cut short) and
+    `value` from t_new on."""
+    if not isinstance(current, Schedule):
+        current = Schedule(times=[0.0], values=[float(current)])
+    kept = [k for k, tk in enumerate(current.times) if tk < t_new]
+    times = [float(current.times[k]) for k in kept]
+    values = [float(current.values[k]) for k in kept]
+    modes = [current.mode(k) for k in kept[:-1]]
+    last = kept[-1] if kept else -1
+    if kept and not current._flat(last) and t_last > times[-1]:  # a ramp under way: it ends at t_last
+        modes.append("ramp")
+        times.append(float(t_last))
+        values.append(current.at(t_last))
+    if not times:  # t_new precedes the first point: the first value held until t_new
+        times, values = [0.0], [float(current.values[0])]
+    modes.append("hold")
+    times.append(float(t_new))
+    values.append(float(value))
+    return Schedule(times=times, values=values, between=modes if "ramp" in modes else "hold")

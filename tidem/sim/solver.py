@@ -95,9 +95,7 @@ class Solver(TallyReads):
             self._move_meshes = hot(make_mesh_mover(self.state, [
                 (m.moving, m.center, m.axis, m.speed, m.velocity, bool(m.schedules.keys() - {"temperature"}))
                 for m in model.meshes]))
-        self.conditions = Conditions(model, self.state, self.gas)  # scheduled temperatures and mesh motions
-        if not self.conditions.active:
-            self.conditions = None
+        self.conditions = Conditions(model, self.state, self.gas)  # scheduled temperatures, plate and mesh motions
         self._average = None
         if f.averaging:
             a = model.averaging
@@ -224,7 +222,7 @@ class Solver(TallyReads):
         self.steps += 1
         need = self.state.max_disp[None] > self._rebuild_disp2
         self._drift_done = False
-        if self.conditions is not None:
+        if self.conditions.active:
             self.conditions.apply(self.t)
         if self._move_meshes is not None:
             self._move_meshes(self.t)
