@@ -143,7 +143,7 @@ def test_keys_and_sliders_put_events_in_the_run_queue(xvfb, monkeypatch, solver_
         view.update(solver)
         events = controls.take()
         steering.paused = True  # the run loop applied the pause: space now resumes
-        view._last = -1e9
+        view._next = -1e9
         presses.append([type("Event", (), {"key": ti.GUI.SPACE})()])
         view.update(solver, paused=True)
         events += controls.take()

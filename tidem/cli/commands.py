@@ -18,12 +18,20 @@ import typer
 from tidem.cli.common import Sets, app, build_or_exit, fail, load_scene, start_taichi
 from tidem.scene.errors import SceneError
 
+SERVE_PORT = 8050  # `--serve` alone
+
+
+def serve_port_given(args: list[str]) -> list[str]:
+    """The arguments with `--serve` followed by no port given SERVE_PORT (a Typer option has no optional value)."""
+    return [f"--serve={SERVE_PORT}" if a == "--serve" and (i + 1 == len(args) or not args[i + 1].isdigit()) else a
+            for i, a in enumerate(args)]
+
 
 def main() -> None:
     """The `tidem` command: the app, with an unexpected exception turned into one line and a log
     file (exit 70, `tidem.cli.crash`); Ctrl-C keeps its own handling (the run loop saves its output)."""
     try:
-        app(prog_name="tidem")
+        app(args=serve_port_given(sys.argv[1:]), prog_name="tidem")
     except Exception as exc:  # the last line of defence: no raw traceback reaches the terminal
         from tidem.cli import crash
 
@@ -41,7 +49,12 @@ def scene(
     arch: Annotated[str, typer.Option(help="Taichi backend: cpu, cuda, vulkan or auto")] = "cpu",
     quiet: Annotated[bool, typer.Option(help="No progress bar")] = False,
     no_render: Annotated[bool, typer.Option("--no-render", help="Skip frames and movie")] = False,
-    view: Annotated[bool, typer.Option("--view", help="Show the run in a window while it goes on (space pauses)")] = False,
+    view: Annotated[bool, typer.Option("--view", help="Show and steer the run in a window while it goes on "
+                                                   "(space pauses; sliders and keys: docs/steering.md)")] = False,
+    serve: Annotated[Optional[int], typer.Option(
+        "--serve", metavar="[PORT]", help=f"Serve the live view and its controls to a browser on localhost:PORT "
+                                          f"(--serve alone: {SERVE_PORT}; 0: a free port); for a machine without a "
+                                          "display")] = None,
     resume: Annotated[Optional[Path], typer.Option(help="Continue the run in this folder from its checkpoint.npz")] = None,
 ):
     """Run a scene: progress bar, snapshots, time series, run.json, frames and an MP4 in the output folder."""
@@ -56,7 +69,14 @@ def scene(
         fail(exc.render(), 2)
     except launch.InputError as exc:
         fail(str(exc), 2)
-    live = _live_view(prepared.model) if view else None
+    views = ([_live_view(prepared.model)] if view else []) + ([_served_view(prepared.model, serve)] if serve is not None
+                                                             else [])
+    views = [v for v in views if v is not None]
+    if len(views) > 1:
+        from tidem.render.serve import Views
+
+        views = [Views(views)]
+    live = views[0] if views else None
     try:
         result = launch.execute(prepared, progress=not quiet, render=not no_render, view=live,
                                 frame_progress=_report(quiet), say=_say)
@@ -86,6 +106,22 @@ def _live_view(model):
             problem = f"the window could not be opened ({str(exc).splitlines()[0][:120]})"
     typer.echo(f"tidem: --view: {problem}; running without the live view", err=True)
     return None
+
+
+def _served_view(model, port: int):
+    """The browser view on localhost:`port` (says its address), or exit 2 where the port cannot be served."""
+    from tidem.render.serve import BrowserView, ServeError
+    from tidem.render.settings import render_settings
+
+    if not 0 <= port <= 65535:
+        fail(f"--serve {port}: a port is 0-65535 (0: a free one)", 2)
+    try:
+        view = BrowserView(model, render_settings(model), port)
+    except ServeError as exc:
+        fail(str(exc), 2)
+    typer.echo(f"tidem: serving the live view at {view.url} (over SSH: ssh -L {view.port}:localhost:{view.port} HOST)",
+               err=True)
+    return view
 
 
 def _report(quiet: bool):

@@ -6,7 +6,9 @@ right, z up; side: y right, z up; top: x right, y up; iso falls back to front), 
 drawn last, coloured by the run's field with the colour map and fixed range of its frames
 (`tidem.render.settings`). Tubes (grey, with their periodic images), the domain outline, a
 colour bar and the simulated time are drawn too. The window is redrawn at most `MAX_FPS` times
-per second of wall time, so drawing costs the run little.
+per second of wall time, with at most `MAX_POINTS` particles (a fixed random subset of a larger
+bed), and never more often than keeps its drawing within `BUDGET` of the wall time (a redraw of
+d seconds waits d / BUDGET for the next), so drawing costs the run little.
 
 Controls (`attach`): one slider per condition the run can change (`tidem.runner.steering.controls_for`:
 the inlet velocity, heated tubes', walls' and meshes' temperatures, rotating meshes' speeds, the
@@ -30,6 +32,8 @@ from tidem.render.frames import FIELDS, field_values, tube_images
 from tidem.render.settings import default_range
 
 MAX_FPS = 10
+BUDGET = 0.03  # the share of wall time a view may take: after a refresh of d s, the next waits d / BUDGET s
+MAX_POINTS = 20_000  # particles drawn at most: a fixed random subset of a larger bed
 MAX_PLOT = (960, 720)  # largest plot area [px]
 MARGIN = 16  # px around the domain
 TOP = 32  # px above the domain, for the time stamp
@@ -92,7 +96,8 @@ class LiveView:
         self.controls = self.steering = None
         self.sliders: list[tuple] = []  # (Control, slider widget, the value last sent)
         self.picked = 0
-        self._last = -np.inf
+        self.pick = shown_subset(model.capacity)
+        self._next = -np.inf  # perf_counter time of the next redraw
         self._scene = None
 
     def _use_field(self, field: str, clim=None, colormap=None) -> None:
@@ -129,24 +134,9 @@ class LiveView:
 
     def capture(self, solver) -> None:
         """Take the particles' positions, sizes and colours from the solver."""
-        S = solver.state
-        idx = np.flatnonzero(S.active.to_numpy())
-        x = S.x.to_numpy()[idx]
-        data = {"radius": S.radius.to_numpy()[idx]}
-        if self.field == "speed":
-            data["velocity"] = S.v.to_numpy()[idx]
-        elif self.field == "temperature":
-            data["temperature"] = S.T.to_numpy()[idx]
-        elif self.field == "group":
-            data["group"] = self.model.group[S.ident.to_numpy()[idx]]
-        elif self.field == "contacts":
-            data["contacts"] = S.ncontact.to_numpy()[idx]
-        values = field_values(self.field, data)
-        lo, hi = self.clim
-        k = np.clip((values - lo) / (hi - lo), 0.0, 1.0) * (len(self.table) - 1)
+        x, radius, colour = particles_coloured(solver, self.model, self.field, self.clim, self.table, self.pick)
         order = np.argsort(self.sign * x[:, self.d], kind="stable")  # far first, nearest last
-        self._scene = (self.to_window(x[order]), data["radius"][order] * self.scale,
-                       self.table[k.round().astype(int)][order], solver.t)
+        self._scene = (self.to_window(x[order]), radius[order] * self.scale, colour[order], solver.t)
 
     def draw(self, note: str = "") -> None:
         """Draw the last captured state and show it."""
@@ -254,9 +244,8 @@ class LiveView:
         if self.gui is None:
             return
         now = time.perf_counter()
-        if now - self._last < 1.0 / MAX_FPS:
+        if now < self._next:
             return
-        self._last = now
         self._keys()
         if self.gui is None:
             return
@@ -266,11 +255,47 @@ class LiveView:
         if self.controls is not None and self.controls.messages:
             notes.append(self.controls.messages[-1])
         self.draw(" | ".join(notes))
+        self._next = next_refresh(now, time.perf_counter(), paused)
 
     def close(self) -> None:
         if self.gui is not None:
             self.gui.close()
             self.gui = None
+
+
+def next_refresh(start: float, end: float, paused: bool) -> float:
+    """When a view that refreshed from `start` to `end` [perf_counter s] may refresh next: MAX_FPS, and
+    within BUDGET of the wall time while the run goes (paused, only MAX_FPS)."""
+    return start + max(1.0 / MAX_FPS, 0.0 if paused else (end - start) / BUDGET)
+
+
+def shown_subset(capacity: int) -> np.ndarray | None:
+    """The particles a view draws: all (None) up to MAX_POINTS, else a fixed random MAX_POINTS of them."""
+    if capacity <= MAX_POINTS:
+        return None
+    return np.sort(np.random.default_rng(0).choice(capacity, MAX_POINTS, replace=False))
+
+
+def particles_coloured(solver, model, field: str, clim, table: np.ndarray, pick: np.ndarray | None = None):
+    """(centres [n, 3], radii [n], colours 0xRRGGBB [n]) of the active particles (of those `pick` keeps, a
+    sorted index array of the capacity), coloured by `field` over the range `clim` with `table`."""
+    S = solver.state
+    idx = np.flatnonzero(S.active.to_numpy())
+    if pick is not None:
+        idx = idx[np.isin(idx, pick, assume_unique=True)]
+    data = {"radius": S.radius.to_numpy()[idx]}
+    if field == "speed":
+        data["velocity"] = S.v.to_numpy()[idx]
+    elif field == "temperature":
+        data["temperature"] = S.T.to_numpy()[idx]
+    elif field == "group":
+        data["group"] = model.group[S.ident.to_numpy()[idx]]
+    elif field == "contacts":
+        data["contacts"] = S.ncontact.to_numpy()[idx]
+    values = field_values(field, data)
+    lo, hi = clim
+    k = np.clip((values - lo) / (hi - lo), 0.0, 1.0) * (len(table) - 1)
+    return S.x.to_numpy()[idx], data["radius"], table[k.round().astype(int)]
 
 
 def _next(cycle: tuple, now: str) -> str:

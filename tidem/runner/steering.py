@@ -157,7 +157,7 @@ class Steering:
             self.controls.messages.append(problem)
             return
         solver = self.solver
-        t_new = solver.t + solver.dt  # the next step's time, as the solver will compute it
+        t_new = float(solver.t + solver.dt)  # the next step's time, as the solver will compute it
         schedule = hold_from(self.current[key], solver.t, t_new, value)
         try:
             solver.conditions.install(key, schedule)
