@@ -2,9 +2,12 @@
 clear message per bad file), the mesh geometry (distances, inside tests, facet sag), the tube
 overlap refusals and the placement around meshes. Plain numpy and pyvista, no kernels."""
 
+import struct
+
 import numpy as np
 import pytest
 import pyvista as pv
+import tomli_w
 
 import tidem.walls.mesh_geometry as geometry
 from tidem.particles.placement import clear_of_obstacles, lattice_sites, place_groups
@@ -139,6 +142,79 @@ def test_point_cloud(tmp_path):
 def test_cad_format_is_refused_with_the_fix(tmp_path):
     (tmp_path / "part.step").write_text("ISO-10303-21;\n")
     assert "export the part from your CAD tool as STL" in one_message(tmp_path, file="part.step")
+
+
+@pytest.mark.parametrize("name, binary", [("cube.ply", True), ("cube.ply", False), ("cube.obj", False)])
+def test_ply_and_obj_cubes_read_as_the_stl_cube(tmp_path, name, binary):
+    """OBJ and PLY are read by tidem itself (`tidem.walls.mesh_files`): the same 12 triangles and 8
+    welded vertices as the STL cube."""
+    cube_file(tmp_path, name=name, binary=binary)
+    walls, errs = load_walls(tmp_path, file=name)
+    assert errs == [] and walls[0].stats["triangles"] == 12 and walls[0].stats["vertices"] == 8
+    assert walls[0].stats["area"] == pytest.approx(6 * 0.04)
+
+
+def binary_stl(triangles: int, stored: int, extra: bytes = b"") -> bytes:
+    """A binary STL of `stored` triangles whose header counts `triangles` (with bytes appended)."""
+    tri = struct.pack("<12f", 0, 0, 1, 0, 0, 0, 0.1, 0, 0, 0, 0.1, 0) + b"\0\0"
+    return b"solid written by a CAD tool".ljust(80) + struct.pack("<I", triangles) + tri * stored + extra
+
+
+PLY_HEAD = ("ply\nformat {fmt} 1.0\nelement vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 1\nproperty list uchar int vertex_indices\nend_header\n")
+BAD_FILES = [
+    ("face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "line 4: a face refers to vertex 9, but the file has 3 vertices"),
+    ("back.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n", "line 4: a face refers to vertex -7"),
+    ("word.obj", "v 0 0 0\nv x 0 0\nv 0 1 0\nf 1 2 3\n", "line 2: a vertex coordinate is not a number"),
+    ("two.obj", "v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", "line 2: a vertex needs x, y and z"),
+    ("edge.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", "line 3: a face needs at least 3 vertices"),
+    ("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "line 4: vertex index 0 (OBJ counts from 1)"),
+    ("empty.obj", "# nothing\n", "not a triangle surface mesh (no vertices and no faces"),
+    ("binary.obj", b"\x00\x01\x02garbage", "is not a text OBJ file"),
+    ("cut.stl", binary_stl(2, 2)[:-20], "binary STL whose header counts 2 triangles (184 bytes), but the file has "
+                                        "164 bytes (truncated)"),
+    ("promise.stl", binary_stl(5, 2), "header counts 5 triangles (334 bytes), but the file has 184 bytes (truncated)"),
+    ("padded.stl", binary_stl(2, 2, b"\0" * 13), "(data after the last triangle)"),
+    ("tiny.stl", b"\x00\x01abc", "too short for an STL file (5 bytes"),
+    ("few.ply", PLY_HEAD.format(fmt="ascii", nv=10) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+     "ends within its vertex (fewer values than the header declares)"),
+    ("more.ply", PLY_HEAD.format(fmt="ascii", nv=3) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n7\n",
+     "holds 1 values more than its header declares"),
+    ("index.ply", PLY_HEAD.format(fmt="ascii", nv=3) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+     "has a face that refers to vertex 7, but the file has 3 vertices"),
+    ("cut.ply", PLY_HEAD.format(fmt="binary_little_endian", nv=3).encode() + b"\x00\x01",
+     "ends within its vertex element (truncated"),
+    ("head.ply", "plyx\ngarbage\n", "is not a PLY file"),
+    ("format.ply", "ply\nformat utf8 1.0\nend_header\n", "has no known format line"),
+    ("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n1\n",
+     "header line 4: a property of an unknown type"),
+]
+
+
+@pytest.mark.parametrize("name, content, message", BAD_FILES, ids=[row[0] for row in BAD_FILES])
+def test_a_malformed_truncated_or_inconsistent_file_is_one_message(tmp_path, name, content, message):
+    path = tmp_path / name
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    assert message in one_message(tmp_path, file=name)
+
+
+def test_no_reader_line_reaches_the_terminal(tmp_path):
+    """`tidem check` on a broken ASCII STL (which VTK reads and complains of on the error stream) and a
+    truncated binary PLY: exit 2 and nothing on stderr but tidem's two lines."""
+    import subprocess
+    import sys
+
+    (tmp_path / "broken.stl").write_text("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0\nendsolid x\n")
+    for name in ("broken.stl", "cut.ply"):
+        if name == "cut.ply":
+            (tmp_path / name).write_bytes(PLY_HEAD.format(fmt="binary_little_endian", nv=3).encode() + b"\x00")
+        scene = raw_scene(meshes=[{"file": name}])
+        (tmp_path / "scene.toml").write_text(tomli_w.dumps(scene))
+        done = subprocess.run([sys.executable, "-m", "tidem", "check", str(tmp_path / "scene.toml")],
+                              capture_output=True, text=True)
+        lines = [ln for ln in done.stderr.splitlines() if not ln.startswith("[Taichi]")]
+        assert done.returncode == 2 and len(lines) == 2, done.stderr
+        assert lines[0].endswith("1 error in the scene") and lines[1].startswith(f"  meshes[0].file: '{name}'")
 
 
 def test_nan_triangles_are_counted(tmp_path):

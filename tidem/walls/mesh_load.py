@@ -1,6 +1,7 @@
 """Read a scene's `[[meshes]]` (triangle-mesh walls from CAD files) into `MeshWall`s.
 
-Each file (STL ASCII or binary, OBJ or PLY; pyvista reads them) is taken relative to the scene
+Each file (STL ASCII or binary, which pyvista reads once `tidem.walls.mesh_files` has checked a
+binary file's length, or OBJ and PLY, which that module reads) is taken relative to the scene
 file's folder, its points are transformed as x' = R_z R_y R_x (scale x) + offset (`rotate` in
 degrees, first about x, then y, then z), coincident vertices are welded (STL stores none of the
 connectivity) within 1e-9 of the mesh's bounding-box diagonal, and triangles with a non-finite
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from tidem.scene.schedule import is_scheduled, start
+from tidem.walls.mesh_files import quiet_native_stderr, read_obj, read_ply, stl_problem
 from tidem.walls.mesh_geometry import facet_sag, triangle_areas, weld
 from tidem.walls.mesh_walls import MeshWall
 
@@ -54,10 +56,14 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray] | str:
     if path.suffix.lower() not in SUFFIXES:
         return (f"'{path.name}' is not an STL, OBJ or PLY file; export the part from your CAD tool as STL "
                 "(ASCII or binary)")
+    if path.suffix.lower() in (".obj", ".ply"):
+        return (read_obj if path.suffix.lower() == ".obj" else read_ply)(path)
+    if path.suffix.lower() == ".stl" and (problem := stl_problem(path)):
+        return problem
     shown = vtkObject.GetGlobalWarningDisplay()
     vtkObject.GlobalWarningDisplayOff()
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), quiet_native_stderr():
             warnings.simplefilter("ignore")
             reader = pv.get_reader(str(path))
             if path.suffix.lower() == ".stl":
