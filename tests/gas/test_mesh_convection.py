@@ -147,12 +147,22 @@ def test_a_tube_drawn_as_a_mesh_heats_still_gas_by_churchill_bernstein_and_the_g
 
 
 def test_a_heated_mesh_reports_its_gas_share_of_alpha():
-    """alpha = mean of (Q_particles + Q_gas) / (A (T_wall - T_bed)) over the second half, each share named."""
-    model = SimpleNamespace(scene=SimpleNamespace(heat=object()), grid=None,
-                            meshes=[SimpleNamespace(temperature=400.0, stats={"area": 0.5}, speed=0.0)])
+    """alpha = mean of (Q_particles + Q_gas) / (A (T_wall - T_bed)) over the second half, each share named;
+    a wall temperature on a schedule is taken at each sample's time."""
+    from tidem.scene.schedule import Schedule
+    from tidem.walls.mesh_walls import MeshWall
+
+    def mesh(**kw):
+        return MeshWall(name="meshes[0]", vertices=np.zeros((3, 3)), triangles=np.array([[0, 1, 2]]), material="steel",
+                        temperature=400.0, stats={"area": 0.5}, **kw)
+
+    model = SimpleNamespace(scene=SimpleNamespace(heat=object()), grid=None, meshes=[mesh()])
     series = {"time_s": np.array([0.0, 1.0, 2.0, 3.0]), "T_mean_K": np.array([300.0, 300.0, 350.0, 350.0]),
               "meshes0_heat_W": np.array([9.0, 9.0, 100.0, 200.0]), "meshes0_gas_heat_W": np.array([1.0, 1.0, 5.0, 5.0])}
     (row,) = mesh_heat_rows(model, np.zeros((0, 3)), np.zeros(0), series)
     assert row["particles_alpha_W_m2K"] == pytest.approx((100.0 + 200.0) / 2 / (0.5 * 50.0))
     assert row["gas_alpha_W_m2K"] == pytest.approx(5.0 / (0.5 * 50.0)) and row["gas_heat_W"] == 5.0
     assert row["mean_alpha_W_m2K"] == pytest.approx(row["particles_alpha_W_m2K"] + row["gas_alpha_W_m2K"])
+    model.meshes = [mesh(schedules={"temperature": Schedule(times=[0.0, 2.5], values=[400.0, 450.0], between="hold")})]
+    (row,) = mesh_heat_rows(model, np.zeros((0, 3)), np.zeros(0), series)
+    assert row["particles_alpha_W_m2K"] == pytest.approx((100.0 / (0.5 * 50.0) + 200.0 / (0.5 * 100.0)) / 2)

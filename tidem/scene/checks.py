@@ -160,7 +160,7 @@ def profile_checks(scene: Scene) -> list[str]:
     if len(starts) > 1:
         errs.append(f"{key} needs every particle to start at one temperature (got {sorted(starts)} K)")
     if scene.gas.nozzles or scene.gas.inlet_ramp > 0 or is_scheduled(scene.gas.inlet_velocity):
-        errs.append(f"{key} needs a uniform, steady gas inlet switched on at once; remove gas.nozzles, "
+        errs.append(f"{key} needs a uniform gas inlet switched on at once and held; remove gas.nozzles, "
                     "gas.inlet_ramp and any schedule of gas.inlet_velocity")
     if is_scheduled(scene.gas.inlet_temperature):
         errs.append(f"{key} compares with Schumann's model of a steady inlet temperature; give "
