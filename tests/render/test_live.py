@@ -119,7 +119,7 @@ def test_window_shows_hot_and_cold_particles_in_place(xvfb, monkeypatch, solver_
 
 
 def test_keys_and_sliders_put_events_in_the_run_queue(xvfb, monkeypatch, solver_for, tmp_path):
-    """Space pauses (again: resumes), n steps, f and v show the next field and view, + raises the picked
+    """Space pauses (again: resumes), n steps, f and v show the next field and view, s the next slice, + raises the picked
     control by a twentieth of its slider's span: each an event in the run's queue
     (`tidem.runner.controls`), which the run loop applies (tests/runner/test_steering.py)."""
     monkeypatch.setenv("DISPLAY", xvfb)
@@ -137,7 +137,7 @@ def test_keys_and_sliders_put_events_in_the_run_queue(xvfb, monkeypatch, solver_
     steering = Steering(solver.model, solver, tmp_path, controls, raw)
     view = LiveView(solver.model, render_settings(solver.model))
     view.attach(controls, steering)
-    presses = [[type("Event", (), {"key": key})() for key in (ti.GUI.SPACE, "n", "f", "v", "+")]]
+    presses = [[type("Event", (), {"key": key})() for key in (ti.GUI.SPACE, "n", "f", "v", "s", "+")]]
     monkeypatch.setattr(view.gui, "get_events", lambda *_filter: presses.pop(0) if presses else [])
     try:
         view.update(solver)
@@ -150,9 +150,10 @@ def test_keys_and_sliders_put_events_in_the_run_queue(xvfb, monkeypatch, solver_
     finally:
         view.close()
     kinds = [(e.kind, e.key, e.value) for e in events]
-    assert kinds[:4] == [("pause", "", None), ("step", "", None), ("show", "", "speed"), ("look", "", "side")]
-    assert kinds[4][:2] == ("set", "domain.wall_temperature") and kinds[4][2] > 350.0
-    assert kinds[5] == ("resume", "", None)
+    assert kinds[:5] == [("pause", "", None), ("step", "", None), ("show", "", "speed"), ("look", "", "side"),
+                         ("cut", "", 0.25)]
+    assert kinds[5][:2] == ("set", "domain.wall_temperature") and kinds[5][2] > 350.0
+    assert kinds[6] == ("resume", "", None)
 
 
 def test_scene_view_runs_with_a_window_and_without_a_display(xvfb, monkeypatch, tmp_path):

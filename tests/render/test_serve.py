@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from tests.kernels.test_gas import packed_column
-from tidem.runner.controls import Controls
+from tidem.runner.controls import Controls, Event
 from tidem.runner.steering import Steering
 
 CHROMIUM = "/usr/bin/chromium"
@@ -60,11 +60,17 @@ def test_page_state_and_events_over_http(solver_for, tmp_path):
         assert state["controls"][0]["value"] == 0.1
         assert post(view.url, {"kind": "set", "key": "gas.inlet_velocity", "value": 0.2}) == (204, "")
         assert post(view.url, {"kind": "pause"}) == (204, "")
+        assert post(view.url, {"kind": "cut", "value": 0.1}) == (204, "")
         assert post(view.url, {"kind": "set", "key": "gas.inlet_velocity"}) == (
             400, "a set event needs 'key' and a number 'value'")
         assert post(view.url, {"kind": "stop"})[0] == 400
         events = [(e.kind, e.key, e.value) for e in controls.take()]
-        assert events == [("set", "gas.inlet_velocity", 0.2), ("pause", "", None)]
+        assert events == [("set", "gas.inlet_velocity", 0.2), ("pause", "", None), ("cut", "", 0.1)]
+        view.steering.apply(Event("cut", value=0.1))
+        view._next = -1e9
+        view.update(solver)
+        state = json.loads(view.state())
+        assert state["slice"] == 0.1 and 0 < state["shown"] < state["active"]  # a tenth of the depth about the middle
     finally:
         view.close()
 

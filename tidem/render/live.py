@@ -8,13 +8,14 @@ drawn last, coloured by the run's field with the colour map and fixed range of i
 colour bar and the simulated time are drawn too. The window is redrawn at most `MAX_FPS` times
 per second of wall time, with at most `MAX_POINTS` particles (a fixed random subset of a larger
 bed), and never more often than keeps its drawing within `BUDGET` of the wall time (a redraw of
-d seconds waits d / BUDGET for the next), so drawing costs the run little.
+d seconds waits DISPLAY_SHARE d / BUDGET for the next: the display server draws it as well), so
+drawing costs the run little.
 
 Controls (`attach`): one slider per condition the run can change (`tidem.runner.steering.controls_for`:
 the inlet velocity, heated tubes', walls' and meshes' temperatures, rotating meshes' speeds, the
 outlet speed); moving one puts a `set` event in the run's queue. Keys: space pauses and resumes,
 n (or the right arrow) takes one step while paused, f shows the next field, v the next view
-(front, side, top), up and down pick a control and + and - raise or lower it by a twentieth of its
+(front, side, top), s the next slice (all, a quarter, a tenth of the depth about the middle), up and down pick a control and + and - raise or lower it by a twentieth of its
 slider's span. Esc or closing the window ends the view and the run goes on headless. The last
 message of the run (a refused value) is shown under the colour bar.
 """
@@ -33,6 +34,8 @@ from tidem.render.settings import default_range
 
 MAX_FPS = 10
 BUDGET = 0.03  # the share of wall time a view may take: after a refresh of d s, the next waits d / BUDGET s
+DISPLAY_SHARE = 2.0  # the window's refresh costs as much again in the display server (another process): a
+# window takes BUDGET / DISPLAY_SHARE in its own process (benchmarks/view_cost.py)
 MAX_POINTS = 20_000  # particles drawn at most: a fixed random subset of a larger bed
 MAX_PLOT = (960, 720)  # largest plot area [px]
 MARGIN = 16  # px around the domain
@@ -42,8 +45,9 @@ PANEL = 210  # px right of the colour bar where Taichi draws the sliders (top ri
 SLIDER_H = 40  # px a slider takes
 # (horizontal axis, vertical axis, depth axis, depth sign of the camera side) as in frames.place_camera
 VIEW_AXES = {"front": (0, 2, 1, -1), "side": (1, 2, 0, 1), "top": (0, 1, 2, 1)}
-KEYS_HELP = ["space: pause / resume", "n: one step (paused)", "f: next field", "v: next view",
+KEYS_HELP = ["space: pause / resume", "n: one step (paused)", "f: next field", "v: next view", "s: slice",
              "up/down: pick a slider", "+ / -: move it"]
+SLICES = (0.0, 0.25, 0.1)  # the slices the s key steps through: all, a quarter, a tenth of the depth
 FIELD_CYCLE = ("temperature", "speed", "group", "radius", "contacts")
 VIEW_CYCLE = ("front", "side", "top")
 
@@ -96,6 +100,7 @@ class LiveView:
         self.controls = self.steering = None
         self.sliders: list[tuple] = []  # (Control, slider widget, the value last sent)
         self.picked = 0
+        self.slice = 0.0  # share of the depth shown about the middle (0: all)
         self.pick = shown_subset(model.capacity)
         self._next = -np.inf  # perf_counter time of the next redraw
         self._scene = None
@@ -134,7 +139,8 @@ class LiveView:
 
     def capture(self, solver) -> None:
         """Take the particles' positions, sizes and colours from the solver."""
-        x, radius, colour = particles_coloured(solver, self.model, self.field, self.clim, self.table, self.pick)
+        x, radius, colour = particles_coloured(solver, self.model, self.field, self.clim, self.table, self.pick,
+                                               (self.d, self.slice))
         order = np.argsort(self.sign * x[:, self.d], kind="stable")  # far first, nearest last
         self._scene = (self.to_window(x[order]), radius[order] * self.scale, colour[order], solver.t)
 
@@ -217,6 +223,8 @@ class LiveView:
                 c.show(_next(FIELD_CYCLE, self.field))
             elif e.key == "v":
                 c.look(_next(VIEW_CYCLE, self.view))
+            elif e.key == "s":
+                c.cut(SLICES[(SLICES.index(self.slice) + 1) % len(SLICES)] if self.slice in SLICES else 0.0)
             elif e.key in (ti.GUI.UP, ti.GUI.DOWN) and self.sliders:
                 self.picked = (self.picked + (1 if e.key == ti.GUI.DOWN else -1)) % len(self.sliders)
             elif e.key in ("+", "=", "-") and self.sliders:
@@ -238,6 +246,7 @@ class LiveView:
             self._use_field(asked["field"])
         if asked.get("view", self.view) != self.view:
             self._use_view(asked["view"])
+        self.slice = asked.get("slice", self.slice)
 
     def update(self, solver, paused: bool = False) -> None:
         """Redraw when due (at most MAX_FPS a second); `paused`: the run is held by the controls."""
@@ -255,7 +264,7 @@ class LiveView:
         if self.controls is not None and self.controls.messages:
             notes.append(self.controls.messages[-1])
         self.draw(" | ".join(notes))
-        self._next = next_refresh(now, time.perf_counter(), paused)
+        self._next = next_refresh(now, now + DISPLAY_SHARE * (time.perf_counter() - now), paused)
 
     def close(self) -> None:
         if self.gui is not None:
@@ -276,13 +285,20 @@ def shown_subset(capacity: int) -> np.ndarray | None:
     return np.sort(np.random.default_rng(0).choice(capacity, MAX_POINTS, replace=False))
 
 
-def particles_coloured(solver, model, field: str, clim, table: np.ndarray, pick: np.ndarray | None = None):
+def particles_coloured(solver, model, field: str, clim, table: np.ndarray, pick: np.ndarray | None = None,
+                       cut: tuple[int, float] | None = None):
     """(centres [n, 3], radii [n], colours 0xRRGGBB [n]) of the active particles (of those `pick` keeps, a
-    sorted index array of the capacity), coloured by `field` over the range `clim` with `table`."""
+    sorted index array of the capacity; with `cut` = (axis, share) only those within share / 2 of the
+    domain's depth along axis from its middle), coloured by `field` over the range `clim` with `table`."""
     S = solver.state
-    idx = np.flatnonzero(S.active.to_numpy())
-    if pick is not None:
-        idx = idx[np.isin(idx, pick, assume_unique=True)]
+    active = S.active.to_numpy().astype(bool)
+    idx = np.flatnonzero(active) if pick is None else pick[active[pick]]
+    x = S.x.to_numpy()[idx]
+    if cut is not None and cut[1] > 0.0:
+        axis, share = cut
+        lo, hi = model.scene.domain.min[axis], model.scene.domain.max[axis]
+        inside = np.abs(x[:, axis] - 0.5 * (lo + hi)) <= 0.5 * share * (hi - lo)
+        idx, x = idx[inside], x[inside]
     data = {"radius": S.radius.to_numpy()[idx]}
     if field == "speed":
         data["velocity"] = S.v.to_numpy()[idx]
@@ -295,7 +311,7 @@ def particles_coloured(solver, model, field: str, clim, table: np.ndarray, pick:
     values = field_values(field, data)
     lo, hi = clim
     k = np.clip((values - lo) / (hi - lo), 0.0, 1.0) * (len(table) - 1)
-    return S.x.to_numpy()[idx], data["radius"], table[k.round().astype(int)]
+    return x, data["radius"], table[k.round().astype(int)]
 
 
 def _next(cycle: tuple, now: str) -> str:

@@ -5,8 +5,8 @@ A server thread (Python's `http.server`, nothing to install) answers three reque
 
 - `GET /`: the page (`serve_page.html`): the bed in 3-D on a canvas (drag rotates, the wheel zooms,
   front/side/top buttons), coloured as the frames, with the time, a slider per live control
-  (`tidem.runner.steering.controls_for`), pause, resume and step, the field, the changes made and
-  the run's messages (a refused value);
+  (`tidem.runner.steering.controls_for`), pause, resume and step, the field, a slice about the
+  middle of the view's depth, the changes made and the run's messages (a refused value);
 - `GET /state`: the latest state as JSON (time, step, paused, field and range, each control's value,
   the changes in effect, the particles: centres and radii as base64 float32, colours as base64
   uint32, which the page decodes in one call each);
@@ -32,13 +32,13 @@ from importlib import resources
 import numpy as np
 
 from tidem.render.frames import FIELDS
-from tidem.render.live import colour_table, next_refresh, particles_coloured, shown_subset
+from tidem.render.live import VIEW_AXES, colour_table, next_refresh, particles_coloured, shown_subset
 from tidem.render.settings import default_range
 from tidem.scene.schedule import value_at
 
 MAX_FPS = 5  # refreshes a second at most (and within tidem.render.live.BUDGET of the wall time)
 IDLE_S = 2.0  # s without a request after which the run stops taking the state
-KINDS = ("set", "pause", "resume", "step", "show", "look")
+KINDS = ("set", "pause", "resume", "step", "show", "look", "cut")
 
 
 class ServeError(RuntimeError):
@@ -84,12 +84,15 @@ class BrowserView:
             self.field = asked["field"]
             self.clim = default_range(self.model, self.field)
             self.table = colour_table(FIELDS[self.field][1])
-        x, radius, colour = particles_coloured(solver, self.model, self.field, self.clim, self.table, self.pick)
+        view = asked.get("view", self.view)
+        share = float(asked.get("slice", 0.0))
+        x, radius, colour = particles_coloured(solver, self.model, self.field, self.clim, self.table, self.pick,
+                                               (VIEW_AXES.get(view, VIEW_AXES["front"])[2], share))
         state = {
             "name": self.model.name, "t": solver.t, "t_end": self.model.t_end, "steps": solver.steps,
             "paused": bool(paused), "field": self.field, "label": FIELDS[self.field][0], "range": list(self.clim),
             "colours": [f"#{int(c):06x}" for c in self.table[:: max(1, len(self.table) // 16)]],
-            "view": asked.get("view", self.view),
+            "view": view, "slice": share,
             "box": [list(self.model.scene.domain.min), list(self.model.scene.domain.max)],
             "shown": int(len(radius)), "active": int(solver.state.active.to_numpy().sum()),
             "controls": self._controls(solver.t),

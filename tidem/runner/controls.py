@@ -3,8 +3,9 @@
 (`tidem.runner.steering.Steering`). Thread-safe, and light to import (`tidem.Controls`).
 
 Events: `set` (a scene key and a value: from the run's next step on the key holds it), `pause`,
-`resume`, `step` (one step while paused), `show` (the field the views colour by) and `look` (their
-view).
+`resume`, `step` (one step while paused), `show` (the field the views colour by), `look` (their
+view) and `cut` (a slice: the share of the domain's depth along the view shown about its middle, 0
+for all).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ LOOKS = ("front", "side", "top")
 
 @dataclass(frozen=True)
 class Event:
-    kind: str  # set, pause, resume, step, show, look
+    kind: str  # set, pause, resume, step, show, look, cut
     key: str = ""
     value: object = None
 
@@ -51,6 +52,9 @@ class Controls:
 
     def look(self, view: str) -> None:
         self.put("look", value=view)
+
+    def cut(self, share: float) -> None:
+        self.put("cut", value=float(share))
 
     def take(self, timeout: float | None = None) -> list[Event]:
         """The events queued so far (waiting up to `timeout` s for a first one when given)."""

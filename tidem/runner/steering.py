@@ -123,7 +123,7 @@ class Steering:
         self.changes: list[tuple[float, str, float]] = []
         self.paused = False
         self.steps_granted = 0  # single steps asked for while paused
-        self.display: dict[str, str] = {}  # the field and view the views show, as last asked
+        self.display: dict[str, object] = {}  # the field, view and slice the views show, as last asked
         if not (self.dir / CSV_NAME).exists():
             (self.dir / CSV_NAME).write_text("time_s,key,value\n")
 
@@ -145,6 +145,8 @@ class Steering:
             self.display["field"] = event.value
         elif event.kind == "look" and event.value in LOOKS:
             self.display["view"] = event.value
+        elif event.kind == "cut" and isinstance(event.value, (int, float)) and 0.0 <= event.value <= 1.0:
+            self.display["slice"] = float(event.value)
         else:
             self.controls.messages.append(f"unknown control event {event.kind} {event.value!r}")
 
