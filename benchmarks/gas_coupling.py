@@ -1,5 +1,5 @@
 """Cost of the gas coupling on the fluidized-bed scene: DEM-only steps against coupled steps
-at several coupling intervals, measured side by side in one sitting.
+at several coupling intervals, measured side by side, alternating.
 
     python benchmarks/gas_coupling.py [--steps 2000] [--intervals 1,5,10,20,40] [--rounds 2]
 

@@ -6,7 +6,7 @@ restored into a fresh solver, a time-series sample and a snapshot, on one scene.
 Builds SCENE (default fluidized_tube), takes 10 steps, then times each. The first checkpoint and
 restore include compiling their kernels (from Taichi's offline cache where it has them): what a run
 pays once. Run an older tree the same way with PYTHONPATH=TREE python -P from outside the project
-folder, one after the other in one sitting (`benchmarks/README.md`).
+folder, one after the other within minutes (this machine's speed drifts; `benchmarks/README.md`).
 """
 
 import sys

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Shipped scenes before and after a change, alternating in one sitting, three seeds each:
+# Shipped scenes before and after a change, alternating, three seeds each:
 # particle-steps/s and the scene's observables from run.json (their spread over the seeds is
 # the yardstick for "unchanged"). No frames are rendered.
 # Usage: BEFORE="env PYTHONPATH=/old/tree python -P -m tidem" benchmarks/scene_speed.sh OUT SCENE:T_END ...

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# tidem and LIGGGHTS on the same settled beds, alternating, in one sitting.
+# tidem and LIGGGHTS on the same settled beds, alternating within one call.
 # Needs: liggghts (apt-get install -y --no-install-recommends liggghts) and a folder prepared
 # as in shared/bench/peers/README.md (settle.lgt -> settled10k.dump -> tile_bed.py bed10k/50k/200k).
 # Usage: benchmarks/side_by_side.sh PEERS_DIR [ROUNDS]

@@ -85,7 +85,8 @@ def slab_axis_for(cells, gravity) -> int:
     x, each slab is one stretch of storage, which `tidem.particles.storage_order` sorts x, then y, then z), unless
     that has fewer than ACROSS_MIN cells and the axis along gravity more (a tall, narrow column).
     Slabs along gravity cut through the storage order: the bubbling and moving beds ran 1.2-1.4x
-    faster with slabs across it (`benchmarks/README.md`, twelfth sitting)."""
+    faster with slabs across it (whole runs from the fill, alternating with slabs along gravity,
+    2026-11-26)."""
     down = max(range(3), key=lambda a: abs(gravity[a])) if any(gravity) else None
     axis = max((a for a in range(3) if a != down), key=lambda a: cells[a])
     return down if down is not None and cells[axis] < ACROSS_MIN and cells[down] > cells[axis] else axis

@@ -7,7 +7,8 @@ one (on this project's 2-core machine, peer bed 10k: the median own pass of the 
 a process 0.94-0.99 ms in some processes, 0.42-0.44 ms in others; one thread: 1.0 ms), most likely
 two workers queued on one core, a woken thread being placed near the thread that woke it. Bound
 one to each core, they ran at 1.27-1.41e7 particle-steps/s against 0.90-1.16e7 unbound
-(`benchmarks/README.md`, sixth sitting).
+(`tidem bench --sizes 10000 --precision float64` with `TIDEM_BIND=none` against the default, five
+alternating rounds, 2026-11-25).
 
 `bind_workers` finds the pool's workers as the threads that `ti.init` started and that run a
 parallel test loop, and binds the k-th to the k-th of the process's allowed CPUs (one logical CPU
