@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 37, target 2: `fluidized_tube --t-end 0.3 --no-render` against the 10k peer bed in float64, and
+# `fluidized_tube --t-end 0.3 --no-render` against the 10k peer bed in float64, and
 # optionally an older tree's fluidized_tube, alternating within one call (this VM is noisy: compare
 # only figures of one run of this script). Prints each run's particle-steps/s and its phase profile.
 #   benchmarks/fluidized_vs_peer.sh WORKDIR [ROUNDS] [BASE]

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Issue 37's third target on a GPU: the laboratory bed at full resolution (`lab_fluidized_bundle` at
+# On a GPU: the laboratory bed at full resolution (`lab_fluidized_bundle` at
 # k = 1: 700 000 grains, snapshots every 0.02 s, overlaps up to 20 % of a radius, no frames, float64), run
 # from the repository root:
 #   bash benchmarks/gpu_lab_bed.sh OUT [PARTS]

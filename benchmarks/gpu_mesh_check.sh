@@ -1,5 +1,5 @@
 #!/bin/bash
-# Mesh walls on a GPU (issue 35's last open item), in one command on a machine with an NVIDIA GPU and
+# Mesh walls on a GPU, in one command on a machine with an NVIDIA GPU and
 # tidem importable (installed, or this tree on PYTHONPATH with tidem/kernels and tidem/scenes linked):
 #   bash benchmarks/gpu_mesh_check.sh OUT
 # Runs each scene with meshes for a short stretch of bed time on CUDA and then on every CPU core of

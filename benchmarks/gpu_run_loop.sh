@@ -1,5 +1,5 @@
 #!/bin/bash
-# Issue 37's GPU check in one command: the laboratory bed at full resolution (700 000 grains, k = 1,
+# The GPU check of the run loop in one command: the laboratory bed at full resolution (700 000 grains, k = 1,
 # snapshots every 0.02 s, no frames) as a run, developed and then measured from a checkpoint, this
 # tree against a baseline tree, and the synchronised profile of the same developed state.
 #   bash benchmarks/gpu_run_loop.sh OUT BASE [DEVELOP_S]

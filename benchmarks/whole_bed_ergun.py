@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The whole pressure drop of a settled bed at low gas speed against Ergun integrated over the
-bed's own voidage profile (issue 36, part 3).
+bed's own voidage profile.
 
 A periodic column (12 x 12 mm, 50 mm high) of 1 mm grains is filled on a lattice, let fall and
 settle on the distributor (0.25 s, no gas); the settled grains are then fixed and air blows through

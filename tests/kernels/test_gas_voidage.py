@@ -1,7 +1,7 @@
 """The voidage a grain sees (`gas.voidage`): a settled bed's whole pressure drop, bed surface and
-distributor layer included, against Ergun integrated over the bed's own voidage profile (issue 36,
-part 3), a lone grain that sees the gas cell's voidage whatever the closure, and the minimum fluidization
-velocity a velocity ramp finds with each closure."""
+distributor layer included, against Ergun integrated over the bed's own voidage profile, a lone grain
+that sees the gas cell's voidage whatever the closure, and the minimum fluidization velocity a
+velocity ramp finds with each closure."""
 
 import numpy as np
 import pytest

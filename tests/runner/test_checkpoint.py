@@ -1,4 +1,4 @@
-"""Checkpoint and resume (issue 8): a resumed float64 run is bit-identical to an uninterrupted
+"""Checkpoint and resume: a resumed float64 run is bit-identical to an uninterrupted
 one (snapshots and time series), SIGTERM stops at a step boundary with a checkpoint, a kill
 during the write leaves the previous checkpoint loadable, and an edited scene is refused."""
 

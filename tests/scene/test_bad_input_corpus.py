@@ -1,5 +1,5 @@
-"""A corpus of malformed scenes, `--set` overrides and paths, as a hurried user types them
-(issue 17): each must exit with code 2 and one message that names the file (or option), the
+"""A corpus of malformed scenes, `--set` overrides and paths, as a hurried user types them:
+each must exit with code 2 and one message that names the file (or option), the
 key and the fix, with no traceback. One row per bad input; the CLI runs in-process."""
 
 import os

@@ -1,4 +1,4 @@
-"""Stability at the extremes (issue 7): every combination of extreme inputs either runs
+"""Stability at the extremes: every combination of extreme inputs either runs
 stably (no NaN, overlaps within 5 % of the radius, energy that does not grow, temperatures
 within the inputs' bounds) or is refused before the first step with a message naming the
 limit and a stable value. And float64 runs are bit-identical when repeated."""

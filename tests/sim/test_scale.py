@@ -1,4 +1,4 @@
-"""Memory and backends (issue 8): the expected peak that `tidem check` prints is within 20 %
+"""Memory and backends: the expected peak that `tidem check` prints is within 20 %
 of the peak resident memory measured for two bed sizes, a scene that would not fit is refused
 before anything is allocated, with the numbers, and --arch auto falls back to the CPU saying so
 in one line."""

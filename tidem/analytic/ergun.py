@@ -1,5 +1,5 @@
 """Ergun's packed-bed pressure gradient, and a whole bed's pressure drop integrated over the bed's own
-voidage profile (the reference of issue 36's settled-bed check: `benchmarks/whole_bed_ergun.py`,
+voidage profile (the reference of the settled-bed check: `benchmarks/whole_bed_ergun.py`,
 `tests/kernels/test_gas_voidage.py`), in a column of constant or of varying cross-section (a tapered bed
 between mesh walls: `tests/gas/test_mesh.py`, `benchmarks/mesh_scenes/tapered_ergun.py`)."""
 
