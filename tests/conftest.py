@@ -19,6 +19,22 @@ from tidem.runtime.startup import ensure_taichi  # noqa: E402  (after TIDEM_COMP
 ensure_taichi("cpu", "float64")
 
 
+QUICK = ("tests/test_import_graph.py", "tests/scene/", "tests/io/", "tests/analytic/", "tests/walls/test_mesh_input.py",
+         "tests/results/test_hydrodynamics.py", "tests/heat/test_packet_model.py", "tests/heat/test_impact_conduction.py",
+         "tests/runtime/test_phases.py", "tests/cli/test_crash.py", "tests/render/test_settings.py",
+         "tests/kernels/test_contact.py", "tests/kernels/test_heat.py",
+         "tests/kernels/test_gas.py::test_packed_bed_pressure_gradient_is_ergun")
+"""The edit loop's selection (`pytest -n 2 -m quick`, README): the scene schema and its errors, the
+layers, files, closed-form models, mesh files, the contact and heat kernels and a packed bed's gas;
+about 1-3 minutes on 2 cores."""
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.nodeid.startswith(QUICK):
+            item.add_marker(pytest.mark.quick)
+
+
 def make_scene(**tables) -> dict:
     """A minimal valid raw scene (one steel material, no gravity, open box) with overrides."""
     raw = {
