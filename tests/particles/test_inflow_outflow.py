@@ -31,9 +31,10 @@ def test_pour_inserts_at_the_set_rate_without_overlap(solver_for):
     assert s.state.ovl.to_numpy().max() < 0.05
 
 
-def test_moving_plate_carries_the_bed_down_at_its_speed(solver_for):
-    speed = 0.01
-    raw = make_scene(
+def plate_bed(speed) -> dict:
+    """A periodic bed of 2 mm grains on a moving plate that sinks at `speed` (a number or a schedule) from
+    t = 0.1 s, from z = 0 down to -0.01 m."""
+    return make_scene(
         domain={"min": [0, 0, -0.01], "max": [0.01, 0.01, 0.03], "periodic": ["x", "y"], "walls": "none",
                 "gravity": [0, 0, -9.81]},
         materials={"sand": SAND},
@@ -42,7 +43,11 @@ def test_moving_plate_carries_the_bed_down_at_its_speed(solver_for):
         outlet={"type": "moving_plate", "speed": speed, "start": 0.1, "height": 0.0, "stop_height": -0.01},
         numerics={"dt_fraction": 0.2},
     )
-    s = solver_for(raw)
+
+
+def test_moving_plate_carries_the_bed_down_at_its_speed(solver_for):
+    speed = 0.01
+    s = solver_for(plate_bed(speed))
     while s.t < 0.15:
         s.step()
     z0 = s.state.x.to_numpy()[:, 2].mean()

@@ -120,20 +120,10 @@ def test_an_outlet_plate_follows_its_speed_schedule(solver_for):
     """A moving plate that sinks at 10 mm/s from t = 0.1 s and at 20 mm/s from t = 0.25 s carries the bed
     down at each speed (as the constant plate does: tests/particles/test_inflow_outflow.py); its height
     is the integral of the schedule."""
-    from tests.particles.test_inflow_outflow import SAND
+    from tests.particles.test_inflow_outflow import plate_bed
     from tidem.walls.surfaces import plate_z
 
-    raw = make_scene(
-        domain={"min": [0, 0, -0.01], "max": [0.01, 0.01, 0.03], "periodic": ["x", "y"], "walls": "none",
-                "gravity": [0, 0, -9.81]},
-        materials={"sand": SAND},
-        particles=[{"name": "bed", "material": "sand", "diameter": {"distribution": "mono", "value": 0.002},
-                    "region": {"min": [0, 0, 0], "max": [0.01, 0.01, 0.01]}}],
-        outlet={"type": "moving_plate", "speed": held([0.0, 0.25], [0.01, 0.02]), "start": 0.1, "height": 0.0,
-                "stop_height": -0.01},
-        numerics={"dt_fraction": 0.2},
-    )
-    s = solver_for(raw)
+    s = solver_for(plate_bed(held([0.0, 0.25], [0.01, 0.02])))
     plate = next(p for p in s.model.planes if p["name"] == "outlet plate")
     assert plate_z(plate, 0.3) == pytest.approx(-0.01 * 0.15 - 0.02 * 0.05, rel=1e-12)
     heights = {}

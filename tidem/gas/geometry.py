@@ -14,7 +14,6 @@ import numpy as np
 from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
-from tidem.scene.schedule import value_at
 
 
 def gas_grid(scene) -> GasGrid:
@@ -187,21 +186,20 @@ def face_kinds(gg: GasGrid, solid: np.ndarray) -> list[np.ndarray]:
     return kinds
 
 
-def inlet_map(gg: GasGrid, gas, t: float = 0.0, velocities: dict | None = None) -> np.ndarray:
-    """Superficial inlet velocity [m/s] of each bottom face at time t (nozzles override the background;
-    each velocity at its scheduled value where the scene gives a schedule). `velocities`: {scene key:
-    velocity or schedule} in place of the scene's (`tidem.gas.limits.inlet_velocities`)."""
-    velocities = velocities or {}
+def inlet_parts(gg: GasGrid, gas) -> np.ndarray:
+    """The distributor part of each bottom face: 0 the background inflow, i + 1 nozzle i (a nozzle
+    overrides the background and the nozzles listed before it); a face's superficial velocity is its
+    part's (`tidem.gas.phase.GasPhase.inlet_at`)."""
     xc = gg.lo[0] + (np.arange(gg.cells[0]) + 0.5) * gg.h[0]
     yc = gg.lo[1] + (np.arange(gg.cells[1]) + 0.5) * gg.h[1]
     X, Y = np.meshgrid(xc, yc, indexing="ij")
-    u = np.full(X.shape, value_at(velocities.get("gas.inlet_velocity", gas.inlet_velocity), t))
+    parts = np.zeros(X.shape, np.int64)
     for i, nz in enumerate(gas.nozzles):
         inside = (X >= nz.x[0]) & (X <= nz.x[1])
         if nz.y is not None:
             inside &= (Y >= nz.y[0]) & (Y <= nz.y[1])
-        u[inside] = value_at(velocities.get(f"gas.nozzles[{i}].velocity", nz.velocity), t)
-    return u
+        parts[inside] = i + 1
+    return parts
 
 
 def voidage_layers(model) -> int:

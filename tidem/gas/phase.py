@@ -20,7 +20,7 @@ import taichi as ti
 
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas.fields import allocate_gas_fields
-from tidem.gas.geometry import convection_walls, gas_grid, gas_walls, inlet_map, sauter_diameter, voidage_layers
+from tidem.gas.geometry import convection_walls, gas_grid, gas_walls, inlet_parts, sauter_diameter, voidage_layers
 from tidem.gas.limits import MAX_COURANT, inlet_velocities
 from tidem.gas.open_volume import open_volumes
 from tidem.gas.species import M_O2, o2_mass_fraction
@@ -72,7 +72,8 @@ class GasPhase:
         self.heated_meshes = [k for k, m in enumerate(model.meshes) if m.temperature is not None]
         self.velocities = dict(inlet_velocities(gas))  # {scene key: velocity or schedule}, `install` replaces one
         self.scheduled_inlet = any(is_scheduled(u) for u in self.velocities.values())
-        self.inlet = inlet_map(gg, gas, 0.0, self.velocities)
+        self.inlet_parts = inlet_parts(gg, gas)  # background, then each nozzle (the dict's order)
+        self.inlet = self.inlet_at(0.0)
         walls = convection_walls(gg, model.tubes, model.meshes, self.cut) \
             if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
@@ -137,12 +138,16 @@ class GasPhase:
         ramp = self.gas.inlet_ramp
         scale = min(t / ramp, 1.0) if ramp > 0 else 1.0
         if self.scheduled_inlet:
-            inlet = inlet_map(self.gg, self.gas, t, self.velocities)
+            inlet = self.inlet_at(t)
             if t > 0.0 and np.array_equal(inlet, self.inlet):
                 return
             self.inlet = inlet
         self.G.inlet.from_numpy(self.inlet * scale)
         self.inlet_scale = scale
+
+    def inlet_at(self, t: float) -> np.ndarray:
+        """Superficial inlet velocity [m/s] of each bottom face at time t: its distributor part's value."""
+        return np.array([float(value_at(u, t)) for u in self.velocities.values()])[self.inlet_parts]
 
     def install(self, key: str, schedule) -> None:
         """From the next gas step on, the inlet velocity or temperature `key` follows `schedule`."""

@@ -94,6 +94,10 @@ class LiveView:
         dom = model.scene.domain
         self.lo, self.hi = np.asarray(dom.min, float), np.asarray(dom.max, float)
         self.view = settings.get("view", "front") if settings.get("view", "front") in VIEW_AXES else "front"
+        h, v = VIEW_AXES[self.view][:2]  # the window takes the first view's plot size and keeps it
+        ext = self.hi - self.lo
+        scale = min((MAX_PLOT[0] - 2 * MARGIN) / ext[h], (MAX_PLOT[1] - 2 * MARGIN) / ext[v])
+        self.plot_w, self.plot_h = int(ext[h] * scale) + 2 * MARGIN, int(ext[v] * scale) + MARGIN + TOP
         self._use_view(self.view)
         self.res = (self.plot_w + BAR + PANEL, max(self.plot_h, 8 * SLIDER_H))
         self.gui = ti.GUI(f"tidem: {model.name}", res=self.res, background_color=0xFFFFFF)
@@ -111,16 +115,11 @@ class LiveView:
         self.table = colour_table(colormap or FIELDS[field][1])
 
     def _use_view(self, view: str) -> None:
-        """The view's axes and scale; the window keeps the size of the first view's plot."""
+        """The view's axes and the scale that fits it into the window's plot."""
         self.view = view
         self.h, self.v, self.d, self.sign = VIEW_AXES[view]
         ext = self.hi - self.lo
-        if not hasattr(self, "plot_w"):
-            self.scale = min((MAX_PLOT[0] - 2 * MARGIN) / ext[self.h], (MAX_PLOT[1] - 2 * MARGIN) / ext[self.v])
-            self.plot_w = int(ext[self.h] * self.scale) + 2 * MARGIN
-            self.plot_h = int(ext[self.v] * self.scale) + MARGIN + TOP
-        else:
-            self.scale = min((self.plot_w - 2 * MARGIN) / ext[self.h], (self.plot_h - MARGIN - TOP) / ext[self.v])
+        self.scale = min((self.plot_w - 2 * MARGIN) / ext[self.h], (self.plot_h - MARGIN - TOP) / ext[self.v])
 
     def attach(self, controls, steering) -> None:
         """Offer the run's live controls (`tidem.runner.steering`): sliders, and keys that put events in

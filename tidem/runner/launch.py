@@ -109,8 +109,8 @@ def load_checkpoint(run_dir: Path, loaded, model, say: Say = to_stderr):
 
 def scene_notes(scene, prefix: str, say: Say = to_stderr) -> None:
     """Advice on a valid scene: passages too narrow for its coarse-grained parcels (`tidem.scene.passages`),
-    temperatures that look like degrees Celsius (`tidem.scene.checks.celsius_notes`)."""
-    from tidem.scene.checks import celsius_notes
+    temperatures that look like degrees Celsius (`tidem.scene.heat_checks.celsius_notes`)."""
+    from tidem.scene.heat_checks import celsius_notes
     from tidem.scene.passages import narrow_passages
 
     for note in narrow_passages(scene) + celsius_notes(scene):

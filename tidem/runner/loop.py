@@ -18,14 +18,14 @@ import taichi as ti
 from tidem.render.plots import read_series
 from tidem.results.averaging import write_averages
 from tidem.runner import checkpoint
+from tidem.runner.controls import Controls
 from tidem.runner.output import Output
 from tidem.runner.output_size import cadence
+from tidem.runner.steering import WATCHED_STEPS, Steering
 from tidem.runner.summary import observed, summary
 from tidem.runtime.phases import SAMPLE_EVERY, clock
-from tidem.sim.model import Model
-from tidem.runner.controls import Controls
-from tidem.runner.steering import WATCHED_STEPS, Steering
 from tidem.sim.conditions import make_steerable
+from tidem.sim.model import Model
 from tidem.sim.solver import RunError, Solver
 
 

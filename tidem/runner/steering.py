@@ -28,6 +28,7 @@ from tidem.gas.geometry import gas_grid
 from tidem.gas.limits import MAX_COURANT
 from tidem.particles.timestep import impact_speed
 from tidem.runner.controls import LOOKS, SHOWN, Controls, Event
+from tidem.scene.load import apply_override
 from tidem.scene.schedule import hold_from, value_at
 from tidem.walls.mesh_walls import STEP_SHARE
 
@@ -168,7 +169,7 @@ class Steering:
             return
         self.current[key] = schedule
         self.changes.append((t_new, key, value))
-        set_key(self.raw, key, schedule.model_dump())
+        apply_override(self.raw, (key, schedule.model_dump()))
         with open(self.dir / CSV_NAME, "a", newline="") as f:
             csv.writer(f).writerow([repr(t_new), key, repr(value)])
         tmp = self.dir / (SCENE_NAME + ".tmp")
@@ -207,15 +208,6 @@ def _scene_value(scene, key: str):
     for part in key.replace("]", "").replace("[", ".").split("."):
         node = node[int(part)] if part.isdigit() else getattr(node, part)
     return node
-
-
-def set_key(raw: dict, key: str, value) -> None:
-    """Set a dotted key (with [i] indices) in a raw scene dict, making the tables on the way."""
-    parts = key.replace("]", "").replace("[", ".").split(".")
-    node = raw
-    for part, nxt in zip(parts, parts[1:]):
-        node = node[int(part)] if part.isdigit() else node.setdefault(part, [] if nxt.isdigit() else {})
-    node[parts[-1]] = value
 
 
 def steered_raw(raw: dict, source: Path | None) -> dict:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import bisect
 import math
+from functools import cached_property
 from typing import Annotated, Literal
 
 import numpy as np
@@ -115,17 +116,20 @@ class VectorSchedule(Strict):
 
     @model_validator(mode="after")
     def _consistent(self):
-        self.component(0)  # the same checks as a number's schedule
+        self.components  # the same checks as a number's schedule
         return self
 
-    def component(self, c: int) -> Schedule:
-        return Schedule(times=self.times, values=[v[c] for v in self.values], between=self.between)
+    @cached_property
+    def components(self) -> tuple[Schedule, Schedule, Schedule]:
+        """One number schedule per component, made once (a run asks every step)."""
+        return tuple(Schedule(times=self.times, values=[v[c] for v in self.values], between=self.between)
+                     for c in range(3))
 
     def at(self, t: float) -> tuple[float, float, float]:
-        return tuple(self.component(c).at(t) for c in range(3))
+        return tuple(s.at(t) for s in self.components)
 
     def integral(self, t: float) -> tuple[float, float, float]:
-        return tuple(self.component(c).integral(t) for c in range(3))
+        return tuple(s.integral(t) for s in self.components)
 
     def peak(self) -> float:
         """The largest magnitude (the magnitude of a linear ramp peaks at one of its ends)."""
@@ -138,7 +142,7 @@ class VectorSchedule(Strict):
             return 0.0
         for k in range(1, len(self.times)):
             if norm[k] > limit:
-                if self.component(0).mode(k - 1) == "hold":
+                if self.components[0].mode(k - 1) == "hold":
                     return float(self.times[k])
                 lo, hi = float(self.times[k - 1]), float(self.times[k])
                 for _ in range(40):  # the magnitude is convex along a ramp: bisect on its first passing
@@ -226,11 +230,6 @@ def first_above(x: Scheduled, limit: float) -> float | None:
     if isinstance(x, VectorSchedule):
         return x.first_above(limit)
     return 0.0 if x is not None and largest_magnitude(x) > limit else None
-
-
-def described(x: Scheduled):
-    """The key as run.json and the summaries give it: the number, or the schedule as a table."""
-    return x.model_dump() if is_scheduled(x) else x
 
 
 def scheduled_keys(table, prefix: str = "") -> list[tuple[str, Schedule | VectorSchedule]]:
