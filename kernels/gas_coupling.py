@@ -45,17 +45,19 @@ import taichi as ti
 
 from .drag import make_drag, make_nusselt
 from .gas_grid import layer_grid, make_cic, serial_loops
+from .gas_smoothing import Filter, make_filter
 from .gas_weights import make_gas_weights, make_in_gas, plain_weights
 from .ordered import in_order
 
 MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas.limits`)
 
 
-def make_self_share(corner):
+def make_self_share(corner, own=(0.0, 0.0, 0.0)):
     """Return self_share(base, frac): the sum over lattice points J of (the CIC weight a particle puts on J)^2,
     what its own volume adds (per unit of volume / cell volume) to the voidage it reads back with the same
     weights; two corners folded onto one point at a wall, or wrapped onto one on a one-cell periodic axis, count
-    as one point."""
+    as one point. Along an axis the averaging-length filter widens (`own[a]` > 0, `kernels/gas_smoothing.py`)
+    that axis's factor is own[a]."""
 
     @ti.func
     def self_share(base, frac):
@@ -63,7 +65,9 @@ def make_self_share(corner):
         for a in ti.static(range(3)):
             o1 = ti.Vector([0, 0, 0])
             o1[a] = 1
-            if corner(base, ti.Vector([0, 0, 0]), -1)[a] != corner(base, o1, -1)[a]:
+            if ti.static(own[a] > 0.0):
+                s *= own[a]
+            elif corner(base, ti.Vector([0, 0, 0]), -1)[a] != corner(base, o1, -1)[a]:
                 s *= (1.0 - frac[a]) ** 2 + frac[a] ** 2
         return s
 
@@ -73,7 +77,8 @@ def make_self_share(corner):
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
                           species: bool = False, tracer_dt: float = 0.0,
-                          coarse_grain: bool = False, cut_cells: bool = False, layers: int = 1):
+                          coarse_grain: bool = False, cut_cells: bool = False, layers: int = 1,
+                          cell_filter: Filter | None = None, layer_filter: Filter | None = None):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
     particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
@@ -90,15 +95,20 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     tubes in the gas) the voidage is taken over each cell's open volume G.open, and the weights over the
     cells and faces the gas flows in (`kernels/gas_weights.py`). With `layers` > 1
     (G.solid_layer allocated) a grain's voidage comes from horizontal layers `layers` times thinner
-    than a gas cell (`layered_voidage`)."""
+    than a gas cell (`layered_voidage`). With `cell_filter` / `layer_filter` (`gas.averaging_length`) the solid
+    volume deposited on the cells / layers is filtered to that averaging length before the voidage is taken
+    (`kernels/gas_smoothing.py`; G.solid_tmp / G.layer_tmp allocated); the drag and heat keep their CIC weights, so
+    the exchange still balances exactly."""
     cic, corner, weight, corners = make_cic(gg)
     layered = layers > 1
+    cell_filtered, layer_filtered = cell_filter is not None, layer_filter is not None
     lcic = lcorner = lweight = lcorners = lself = cself = inv_lvol = None  # used only when layered
     if layered:
         lg = layer_grid(gg, layers)
         lcic, lcorner, lweight, lcorners = make_cic(lg)
         inv_lvol = 1.0 / lg.volume
-        lself, cself = make_self_share(lcorner), make_self_share(corner)
+        lself = make_self_share(lcorner, layer_filter.own if layer_filter else (0.0, 0.0, 0.0))
+        cself = make_self_share(corner, cell_filter.own if cell_filter else (0.0, 0.0, 0.0))
     share, gweight, gself = plain_weights(weight)
     lshare = lgweight = lgself = None
     if cut_cells:
@@ -208,16 +218,50 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
             w = lgweight(base, frac, o, -1, s, m)
             eps_l += w * (1.0 - G.solid_layer[J] * inv_lvol / open_vol)
             open_l += w * open_vol
-        own_l = vp * inv_lvol / open_l * (lgself(base, frac, s) if m else lself(base, frac))
+        own_l = vp * inv_lvol / open_l * lself(base, frac)
+        if ti.static(not layer_filtered):
+            if m:
+                own_l = vp * inv_lvol / open_l * lgself(base, frac, s)
         cbase, cfrac = cic(x, -1)
         cs, cm = share(cbase, cfrac, -1)
-        own_c = vp * inv_vol / open_l * (gself(cbase, cfrac, cs) if cm else cself(cbase, cfrac))
+        own_c = vp * inv_vol / open_l * cself(cbase, cfrac)
+        if ti.static(not cell_filtered):  # (filtered: the separable form beside walls too)
+            if cm:
+                own_c = vp * inv_vol / open_l * gself(cbase, cfrac, cs)
         phi = ti.min(ti.max(1.0 - eps_l - own_l, 0.0), 1.0)
         s0 = (1.0 - phi) ** 4 / (1.0 + 2.0 * phi) ** 2
         return ti.min(ti.max(eps_l + s0 * (own_l - own_c), min_voidage), 1.0)
 
+    @ti.func
+    def cell_open(I):
+        f = 1.0
+        if ti.static(cut_cells):
+            f = G.open[I] if G.solid[I] == 0 else 0.0
+        return f
+
+    @ti.func
+    def layer_open(I):
+        f = 1.0
+        if ti.static(cut_cells):
+            f = G.open_layer[I] if G.solid[I[0], I[1], I[2] // layers] == 0 else 0.0
+        return f
+
+    filters = []
+    if cell_filter is not None:
+        filters.append(make_filter(cell_filter, cells, gg.periodic, G.solid_vol, G.solid_tmp, cell_open, serial))
+    if layer_filter is not None:
+        filters.append(make_filter(layer_filter, layer_cells, gg.periodic, G.solid_layer, G.layer_tmp, layer_open,
+                                   serial))
+
+    def deposit_volume(n: int):
+        """Deposit the particles' volume, filter it to the averaging length where one is set, take the voidage."""
+        deposit_solids(n)
+        for apply in filters:
+            apply()
+        set_voidage()
+
     @ti.kernel
-    def deposit_volume(n: ti.i32):
+    def deposit_solids(n: ti.i32):
         if ti.static(serial):
             ti.loop_config(serialize=True)
         for I in ti.grouped(ti.ndrange(*cells)):
@@ -243,6 +287,9 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                     for o_t in ti.static(lcorners(-1)):
                         o = ti.Vector(o_t)
                         G.solid_layer[lcorner(base, o, -1)] += lgweight(base, frac, o, -1, s, m) * vp
+
+    @ti.kernel
+    def set_voidage():
         if ti.static(serial):
             ti.loop_config(serialize=True)
         for I in ti.grouped(ti.ndrange(*cells)):

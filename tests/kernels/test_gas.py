@@ -282,6 +282,8 @@ def test_a_tube_thinner_than_a_gas_cell_still_fills_one(centre):
     ({"cell_size": 0.0015}, "gas.cell_size: cells of"),
     ({"cell_size": 0.004, "nozzles": [{"x": [0.0, 0.02], "velocity": 1.0}]}, "gas.nozzles[0].x"),
     ({"cell_size": 0.004, "inlet_temperature": 400.0}, "gas temperatures need a [heat] table"),
+    ({"cell_size": 0.004, "averaging_length": 0.008}, "gas.averaging_length: 0.008 m is no longer than"),
+    ({"cell_size": 0.004, "averaging_length": -0.01}, "gas.averaging_length"),
 ])
 def test_bad_gas_input_is_named(gas, fragment):
     from tidem.scene.load import validate

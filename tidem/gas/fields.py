@@ -3,7 +3,7 @@ that use them are in `kernels/gas_flow.py`, `kernels/gas_energy.py`, `kernels/ga
 `kernels/species.py`.
 
 Per cell [cells]: eps and eps_old (voidage now and at the last gas step), solid_vol (particle
-volume deposited [m^3]), p (pressure [Pa]), rhs, diag and cg_r, cg_d, cg_q (the pressure
+volume deposited [m^3]; solid_tmp with an averaging-length filter), p (pressure [Pa]), rhs, diag and cg_r, cg_d, cg_q (the pressure
 system and its CG vectors), solid (1 inside a tube or out of the gas's reach behind a mesh); with
 tubes or meshes open (the open volume of the cell, `tidem.gas.open_volume`); with meshes part (the
 share of the cell its gas part fills, `tidem.gas.apertures`); with heat T and T_new [K], H (particle
@@ -34,7 +34,7 @@ from tidem.kernels.gas_grid import GasGrid
 def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarray], walls: dict | None,
                         n_walls: int, heat: bool, sources: bool, species: bool,
                         open_volumes: dict[str, np.ndarray] | None = None, layers: int = 1, band: int = 0,
-                        cut=None):
+                        cut=None, filters: tuple[bool, bool] = (False, False)):
     """Place the fields a scene's gas needs and fill the fixed ones (solid cells, face kinds,
     tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree). With `layers` > 1,
     solid_layer: the solid volume on cells cut into that many horizontal layers (`kernels/gas_coupling.py`). With
@@ -42,7 +42,8 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
     cell (open), face (open_face) and layer (open_layer). With
     `band` = w > 0, band (cells x w + 1) and band_y (cells) for the direct pressure solve (`kernels/gas_band.py`).
     With `cut` (the meshes' `tidem.gas.mesh.GasCut`) part (each cell's gas part's share of its volume) and
-    aperture (each face's open share, `tidem.gas.apertures`)."""
+    aperture (each face's open share, `tidem.gas.apertures`). With `filters` (cells, layers) filtered to
+    `gas.averaging_length`, the scratch fields solid_tmp and layer_tmp (`kernels/gas_smoothing.py`)."""
     G = SimpleNamespace()
     fb = ti.FieldsBuilder()
     cell_names = ["eps", "eps_old", "solid_vol", "p", "rhs", "diag", "cg_r", "cg_d", "cg_q"]
@@ -54,6 +55,8 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         cell_names += ["Y", "Y_new", "o2_sink"]
     if open_volumes is not None:
         cell_names += ["open"]
+    if filters[0]:
+        cell_names += ["solid_tmp"]
     if cut is not None:
         cell_names += ["part"]
     for name in cell_names:
@@ -62,6 +65,9 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
     if layers > 1:
         G.solid_layer = ti.field(fp)
         fb.dense(ti.ijk, (gg.cells[0], gg.cells[1], gg.cells[2] * layers)).place(G.solid_layer)
+        if filters[1]:
+            G.layer_tmp = ti.field(fp)
+            fb.dense(ti.ijk, (gg.cells[0], gg.cells[1], gg.cells[2] * layers)).place(G.layer_tmp)
         if open_volumes is not None:
             G.open_layer = ti.field(fp)
             fb.dense(ti.ijk, open_volumes["layers"].shape).place(G.open_layer)

@@ -14,6 +14,7 @@ import numpy as np
 from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
+from tidem.kernels.gas_smoothing import plan_filter
 
 
 def gas_grid(scene) -> GasGrid:
@@ -207,6 +208,15 @@ def voidage_layers(model) -> int:
     particle (parcel) diameter high, the Sauter mean of the scene's particles, at least 1; 1 with
     `gas.voidage = "cell"`."""
     return layers_for(model.scene, sauter_diameter(2.0 * model.radius))
+
+
+def voidage_filters(gg, length: float | None, layers: int):
+    """The averaging-length filters (`kernels/gas_smoothing.py`) of the cells' solid volume and, with the layered
+    voidage, of the layers' (across only: a layer keeps its height of about one grain); None where none is needed."""
+    cells = plan_filter(gg.h, gg.cells, length)
+    if layers <= 1:
+        return cells, None
+    return cells, plan_filter(gg.h, (gg.cells[0], gg.cells[1], gg.cells[2] * layers), length, axes=(0, 1))
 
 
 def sauter_diameter(d: np.ndarray, count: np.ndarray | float = 1.0) -> float:

@@ -51,6 +51,7 @@ class Gas(Strict):
     initial_temperature: Positive | None = None
     drag: Literal["gidaspow", "di_felice"] = "gidaspow"
     voidage: Literal["layered", "cell"] = "layered"
+    averaging_length: Positive | None = None
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"
     conduction: StrictBool = True
