@@ -14,7 +14,7 @@ SAND = {"density": 2500.0, "youngs_modulus": 2e6, "poisson_ratio": 0.3, "restitu
 D = 0.001
 
 
-def fixed_grains(x, cell, length=None, voidage="layered", tube=False, box=(0.03, 0.004, 0.06)):
+def fixed_grains(x, cell, length, voidage="layered", tube=False, box=(0.03, 0.004, 0.06)):
     gas = {"cell_size": cell, "inlet_velocity": 0.1, "coupling_interval": 1, "voidage": voidage}
     if length is not None:
         gas["averaging_length"] = length
@@ -108,3 +108,8 @@ def test_the_voidage_a_grain_sees_hangs_less_on_the_cell(solver_for):
     plain = np.sqrt(np.mean((seen_voidage(solver_for, x, 0.003, None) - seen_voidage(solver_for, x, 0.005, None))**2))
     kept = np.sqrt(np.mean((seen_voidage(solver_for, x, 0.003, 0.012) - seen_voidage(solver_for, x, 0.005, 0.012))**2))
     assert kept < 0.4 * plain  # measured: RMS 0.0107 without, 0.0027 with
+
+
+def test_without_a_length_the_cells_average_alone(solver_for):
+    s = solver_for(fixed_grains([[0.015, 0.002, 0.02]], 0.003, None))
+    assert s.gas.filters == (None, None)

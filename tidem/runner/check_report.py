@@ -73,5 +73,8 @@ def gas_line(model) -> str:
     width = band_width(gg, cpu=True)
     cg = f"Jacobi-preconditioned CG (tolerance {gas.tolerance:g}, at most {gas.max_iterations} iterations)"
     solve = (f"directly on the CPU (banded Cholesky, half-bandwidth {width} cells), by {cg} on a GPU" if width else f"by {cg}")
+    averaged = (f"averaged over {gas.averaging_length:g} m (gas.averaging_length)" if gas.averaging_length else
+                "averaged over two cells (the cells' own; gas.averaging_length sets a length apart from them)")
     return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
-            f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + f"; pressure solved {solve}")
+            f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + f", {averaged}; "
+            f"pressure solved {solve}")
