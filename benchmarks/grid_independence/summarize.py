@@ -101,7 +101,7 @@ def main(argv: list[str]) -> None:
     out = Path(argv[0])
     lines = ["Second half of each run; per cell the mean over the seeds and (their range).", ""]
     for arg in argv[1:]:
-        label, folder = arg.split("=", 1)
+        label, folder = arg.rsplit("=", 1)
         lines += table(label, study(Path(folder)))
     out.write_text("\n".join(lines))
     print("\n".join(lines))
