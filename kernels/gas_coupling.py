@@ -45,33 +45,11 @@ import taichi as ti
 
 from .drag import make_drag, make_nusselt
 from .gas_grid import layer_grid, make_cic, serial_loops
-from .gas_smoothing import Filter, make_filter
-from .gas_weights import make_gas_weights, make_in_gas, plain_weights
+from .gas_smoothing import Filter, make_filter, make_open_shares
+from .gas_weights import make_gas_weights, make_in_gas, make_self_share, plain_weights
 from .ordered import in_order
 
 MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas.limits`)
-
-
-def make_self_share(corner, own=(0.0, 0.0, 0.0)):
-    """Return self_share(base, frac): the sum over lattice points J of (the CIC weight a particle puts on J)^2,
-    what its own volume adds (per unit of volume / cell volume) to the voidage it reads back with the same
-    weights; two corners folded onto one point at a wall, or wrapped onto one on a one-cell periodic axis, count
-    as one point. Along an axis the averaging-length filter widens (`own[a]` > 0, `kernels/gas_smoothing.py`)
-    that axis's factor is own[a]."""
-
-    @ti.func
-    def self_share(base, frac):
-        s = 1.0
-        for a in ti.static(range(3)):
-            o1 = ti.Vector([0, 0, 0])
-            o1[a] = 1
-            if ti.static(own[a] > 0.0):
-                s *= own[a]
-            elif corner(base, ti.Vector([0, 0, 0]), -1)[a] != corner(base, o1, -1)[a]:
-                s *= (1.0 - frac[a]) ** 2 + frac[a] ** 2
-        return s
-
-    return self_share
 
 
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
@@ -232,20 +210,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         s0 = (1.0 - phi) ** 4 / (1.0 + 2.0 * phi) ** 2
         return ti.min(ti.max(eps_l + s0 * (own_l - own_c), min_voidage), 1.0)
 
-    @ti.func
-    def cell_open(I):
-        f = 1.0
-        if ti.static(cut_cells):
-            f = G.open[I] if G.solid[I] == 0 else 0.0
-        return f
-
-    @ti.func
-    def layer_open(I):
-        f = 1.0
-        if ti.static(cut_cells):
-            f = G.open_layer[I] if G.solid[I[0], I[1], I[2] // layers] == 0 else 0.0
-        return f
-
+    cell_open, layer_open = make_open_shares(G, cut_cells, layers)
     filters = []
     if cell_filter is not None:
         filters.append(make_filter(cell_filter, cells, gg.periodic, G.solid_vol, G.solid_tmp, cell_open, serial))

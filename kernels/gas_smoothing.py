@@ -91,3 +91,24 @@ def make_filter(plan: Filter, shape, periodic, vol, tmp, open_share, serial: boo
             step(tmp, vol)
 
     return apply
+
+
+def make_open_shares(G, cut_cells: bool, layers: int):
+    """Return (cell_open(I), layer_open(I)): f of eq. (2) at a cell and at a layer, the open share of its volume
+    (G.open, G.open_layer) with tubes or meshes in the gas, 0 in a solid cell, else 1."""
+
+    @ti.func
+    def cell_open(I):
+        f = 1.0
+        if ti.static(cut_cells):
+            f = G.open[I] if G.solid[I] == 0 else 0.0
+        return f
+
+    @ti.func
+    def layer_open(I):
+        f = 1.0
+        if ti.static(cut_cells):
+            f = G.open_layer[I] if G.solid[I[0], I[1], I[2] // layers] == 0 else 0.0
+        return f
+
+    return cell_open, layer_open

@@ -56,7 +56,7 @@ def make_gas_weights(corner, weight, corners, point_in_gas):
     and some in it, s = 1 / (the weights of those in it), else (1, False);
     gas_weight(base, frac, o, stagger, s, masked): corner o's weight times s, 0 for a corner out of the gas;
     gas_self_share(base, frac, s): (cells only) the sum over the distinct points in the gas of the squared
-    weight there, the masked form of `gas_coupling.make_self_share` (corners that fold onto one point at a
+    weight there, the masked form of `make_self_share` (corners that fold onto one point at a
     wall or on a one-point axis count as one)."""
 
     @ti.func
@@ -123,3 +123,25 @@ def plain_weights(weight):
         return 0.0
 
     return gas_share, gas_weight, gas_self_share
+
+
+def make_self_share(corner, own=(0.0, 0.0, 0.0)):
+    """Return self_share(base, frac): the sum over lattice points J of (the CIC weight a particle puts on J)^2,
+    what its own volume adds (per unit of volume / cell volume) to the voidage it reads back with the same
+    weights; two corners folded onto one point at a wall, or wrapped onto one on a one-cell periodic axis, count
+    as one point. Along an axis the averaging-length filter widens (`own[a]` > 0, `kernels/gas_smoothing.py`)
+    that axis's factor is own[a]."""
+
+    @ti.func
+    def self_share(base, frac):
+        s = 1.0
+        for a in ti.static(range(3)):
+            o1 = ti.Vector([0, 0, 0])
+            o1[a] = 1
+            if ti.static(own[a] > 0.0):
+                s *= own[a]
+            elif corner(base, ti.Vector([0, 0, 0]), -1)[a] != corner(base, o1, -1)[a]:
+                s *= (1.0 - frac[a]) ** 2 + frac[a] ** 2
+        return s
+
+    return self_share

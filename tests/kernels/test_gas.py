@@ -159,8 +159,14 @@ def test_fixed_particle_heats_as_lumped_solution(solver_for, model, nusselt):
     assert s.state.T.to_numpy()[0] - t_p == pytest.approx(expected - t_p, rel=0.01)
 
 
-def test_drag_on_the_gas_balances_the_drag_on_the_particles(solver_for):
-    s = solver_for(fluid_bed(0.8))
+@pytest.mark.parametrize("averaging_length", [None, 0.012])
+def test_drag_on_the_gas_balances_the_drag_on_the_particles(solver_for, averaging_length):
+    """Also with the voidage filtered to an averaging length (`kernels/gas_smoothing.py`): the drag keeps its
+    cloud-in-cell weights."""
+    raw = fluid_bed(0.8)
+    if averaging_length is not None:
+        raw["gas"]["averaging_length"] = averaging_length
+    s = solver_for(raw)
     for _ in range(400):
         s.step()
     s.gas.step(s.t)
