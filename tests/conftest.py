@@ -14,9 +14,17 @@ import pytest
 os.environ.setdefault("TIDEM_COMPILE", "fast")
 os.environ.setdefault("TI_ENABLE_PYBUF", "0")  # pytest's captured stdout would make Taichi print after every launch
 
-from tidem.runtime.startup import ensure_taichi  # noqa: E402  (after TIDEM_COMPILE is set)
+from tidem.runtime.startup import ensure_taichi, restart  # noqa: E402  (after TIDEM_COMPILE is set)
 
 ensure_taichi("cpu", "float64")
+
+
+@pytest.fixture(autouse=True)
+def fresh_taichi():
+    """Each test on a fresh Taichi program (CPU, float64): its scenes' kernels then have the cache keys
+    they have in any test that builds the same scene first, in either xdist worker, and are compiled
+    once per suite, not once per test (`tidem.runtime.startup.restart`)."""
+    restart("cpu", "float64")
 
 
 QUICK = ("tests/test_import_graph.py", "tests/scene/", "tests/io/", "tests/analytic/", "tests/walls/test_mesh_input.py",

@@ -15,6 +15,7 @@ from tidem.io.vtp import read_vtp
 from tidem.render.plots import read_series
 from tidem.runner import checkpoint
 from tidem.runner.loop import run
+from tidem.runtime.startup import restart
 from tidem.scene.load import validate
 from tidem.sim.model import build_model
 from tidem.sim.solver import Solver
@@ -73,6 +74,7 @@ def uninterrupted(tmp_path_factory):
 
 
 def resume(out, t_end=T_END, conduction_interval=1, **numerics):
+    restart()  # the same scene again, first after a start: its kernels come from the cache
     loaded = validate(hot_pour(t_end, conduction_interval, **numerics))
     meta, arrays = checkpoint.load(out)
     checkpoint.check_scene(meta, loaded.raw, numerics.get("precision", "float64"))
@@ -80,6 +82,7 @@ def resume(out, t_end=T_END, conduction_interval=1, **numerics):
 
 
 def test_run_to_half_then_resume_is_bit_identical(uninterrupted, tmp_path):
+    restart()  # the same scene again, first after a start: its kernels come from the cache
     first = run(build_model(validate(hot_pour(T_END / 2))), tmp_path, progress=False)
     assert first.status == "finished" and (tmp_path / "checkpoint.npz").is_file()
     second = resume(tmp_path)
@@ -92,6 +95,7 @@ def test_mixed_precision_resume_is_bit_identical(tmp_path):
     as they are, and the resumed run is the uninterrupted one bit for bit."""
     whole, half = tmp_path / "whole", tmp_path / "half"
     assert run(build_model(validate(hot_pour(precision="mixed"))), whole, progress=False).status == "finished"
+    restart()  # the same scene again, first after a start: its kernels come from the cache
     assert run(build_model(validate(hot_pour(T_END / 2, precision="mixed"))), half, progress=False).status == "finished"
     assert resume(half, precision="mixed").status == "finished"
     assert_same_run(whole, half)
@@ -103,6 +107,7 @@ def test_conduction_every_few_steps_resumes_bit_identical(tmp_path):
     uninterrupted one bit for bit."""
     whole, half = tmp_path / "whole", tmp_path / "half"
     assert run(build_model(validate(hot_pour(conduction_interval=5))), whole, progress=False).status == "finished"
+    restart()  # the same scene again, first after a start: its kernels come from the cache
     first = run(build_model(validate(hot_pour(T_END / 2, conduction_interval=5))), half, progress=False)
     assert first.status == "finished" and first.steps % 5 != 0, "the checkpoint falls between two evaluations"
     assert resume(half, conduction_interval=5).status == "finished"
@@ -118,6 +123,7 @@ def test_sigterm_checkpoints_at_a_step_boundary_and_resume_is_bit_identical(unin
             os.kill(os.getpid(), signal.SIGTERM)
 
     monkeypatch.setattr(Solver, "_step", step)
+    restart()  # the same scene again, first after a start: its kernels come from the cache
     stopped = run(build_model(validate(hot_pour())), tmp_path, progress=False)
     # the run loop stops at the end of the steps it hands the solver at once (50 at most, tidem.runner.loop)
     assert stopped.status == "interrupted" and "SIGTERM" in stopped.message and 777 <= stopped.steps <= 800
@@ -209,7 +215,9 @@ def test_resumed_reacting_run_keeps_the_reaction_log(tmp_path_factory):
 
     whole, split = tmp_path_factory.mktemp("whole_rx"), tmp_path_factory.mktemp("split_rx")
     assert run(build_model(reacting(T_END)), whole, progress=False).status == "finished"
+    restart()  # the same scene again, first after a start: its kernels come from the cache
     assert run(build_model(reacting(T_END / 2)), split, progress=False).status == "finished"
+    restart()  # the same scene again, first after a start: its kernels come from the cache
     loaded = reacting(T_END)
     meta, arrays = checkpoint.load(split)
     assert run(build_model(loaded), split, progress=False, resume=(meta, arrays)).status == "finished"

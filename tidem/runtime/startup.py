@@ -1,8 +1,9 @@
 """Taichi start-up: quiet, cached, and initialised once per process.
 
 `ensure_taichi` is the only place that calls `ti.init`. It skips Taichi's network version
-check, drops the banner, keeps the offline kernel cache on, and re-initialises only when a
-different architecture or precision is asked for (a test session shares one init).
+check, drops the banner, keeps the offline kernel cache on, installs the lighter kernel frontend
+(`taichi_frontend`), and re-initialises only when a different architecture or precision is asked
+for (a test session shares one init).
 
 Compile time against run speed: Taichi's IR optimization ("advanced optimization") triples
 the time to compile a kernel and makes few kernels faster. `TIDEM_COMPILE` chooses:
@@ -24,12 +25,14 @@ import time
 
 import taichi as ti
 
+from tidem.runtime import taichi_frontend
 from tidem.runtime.thread_binding import bind_mode, bind_workers, process_threads
 
 _current: tuple[str, str, int] | None = None
 bound_workers: frozenset[int] = frozenset()  # the CPU workers the last start bound to cores
 COMPILE_MODES = ("auto", "full", "fast")
 _auto: dict[tuple[str, int], str] = {}  # what 'auto' started, by (precision, threads)
+_fresh_size: tuple[int, int] | None = None  # _program_size() just after the last start
 
 
 class BackendUnavailable(RuntimeError):
@@ -67,6 +70,28 @@ def hot(kernel):
     return call
 
 
+def restart(arch: str = "cpu", precision: str = "float64", threads: int | None = None) -> str:
+    """Start Taichi afresh: every field and compiled kernel of the program before goes (its newly
+    compiled kernels to the offline cache), then `ensure_taichi(arch, precision, threads)`. A program
+    as its start left it, on that architecture and precision, is kept.
+
+    A kernel's cache key holds the ids of the fields it touches, and ids count up over a program's
+    life: the same scene built again later in one program compiles again. Built first after a
+    start, a scene has the keys it has when built first in any other process, and finds its
+    kernels in the cache (the test suite starts each test so)."""
+    global _current
+    if _current is not None and not (_current[:2] == (arch, precision) and _program_size() == _fresh_size):
+        ti.reset()
+        _current = None
+    return ensure_taichi(arch, precision, threads)
+
+
+def _program_size() -> tuple[int, int]:
+    """The program's field trees and compiled kernels: what a start leaves, and what use adds."""
+    runtime = ti.lang.impl.get_runtime()
+    return runtime.prog.get_snode_tree_size(), runtime.get_num_compiled_functions()
+
+
 def _arch_for(name: str):
     return {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan}[name]
 
@@ -78,7 +103,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
     falls back to the CPU, saying so on stderr (Taichi's own `ti.gpu` probe is not used: it
     crashes the process on a machine without a GPU or display).
     """
-    global _current, bound_workers
+    global _current, bound_workers, _fresh_size
     mode = compile_mode()
     bind_mode()  # TIDEM_BIND, checked before Taichi starts
     threads = threads or int(os.environ.get("TI_CPU_MAX_NUM_THREADS", os.cpu_count() or 1))
@@ -99,6 +124,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
         return arch
     if _current is not None:
         ti.reset()
+    taichi_frontend.install()
     fp = ti.f32 if precision == "float32" else ti.f64  # 'mixed' stores only the contact history in float32
     existing = process_threads()
     buf = io.StringIO()
@@ -126,6 +152,7 @@ def ensure_taichi(arch: str = "cpu", precision: str = "float64", threads: int | 
     bound_workers = frozenset()
     if started == "cpu":
         bound_workers = bind_workers(threads, process_threads() - existing, _busy_loop)
+    _fresh_size = _program_size()
     return started
 
 

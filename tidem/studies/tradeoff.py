@@ -56,14 +56,15 @@ def variants(vary: list[tuple[str, list[str]]], fixed: list[str] = ()) -> list[V
 def run_variant(scene: str, overrides: list[str], out_dir: str, threads: int) -> dict:
     """Run one variant (in a Dask worker process); return its figures or its error."""
     from tidem.runner.loop import run
-    from tidem.runtime.startup import ensure_taichi
+    from tidem.runtime.startup import restart
     from tidem.scene.errors import SceneError
     from tidem.scene.load import load
     from tidem.sim.model import build_model
 
     try:
         loaded = load(scene, overrides)
-        ensure_taichi("cpu", loaded.scene.numerics.precision, threads)
+        restart("cpu", loaded.scene.numerics.precision, threads)  # a fresh program: a variant of a structure
+        # run before (another seed, a rerun of the study) finds its kernels in the cache
         model = build_model(loaded)
     except SceneError as exc:
         return {"status": "bad scene", "message": exc.render()}
