@@ -12,6 +12,14 @@ diameter, w = |u - v|, rho and mu the gas density and viscosity.
   For eps -> 1 this is the single-sphere drag C_D (pi d^2/4) rho w^2 / 2.
 * DI_FELICE (Di Felice 1994): F = C_D (pi d^2/4) rho eps^2 w (u - v) eps^-chi / 2,
     C_D = (0.63 + 4.8 Re^-1/2)^2, chi = 3.7 - 0.65 exp(-(1.5 - log10 Re)^2 / 2), Re as above.
+* BEETSTRA (Beetstra, van der Hoef & Kuipers 2007, AIChE J. 53, 489, eq. 9, monodisperse; fitted to
+  lattice-Boltzmann flows through random arrays, 0 <= phi <= 0.6, Re <= 1000): F = K (u - v) with
+  K = 3 pi mu d eps F(phi, Re), phi = 1 - eps, Re as above, and
+    F = 10 phi / eps^2 + eps^2 (1 + 1.5 phi^1/2)
+        + 0.413 Re / (24 eps^2) (1/eps + 3 eps phi + 8.4 Re^-0.343) / (1 + 10^(3 phi) Re^-(1 + 4 phi)/2).
+  F is the drag without the mean pressure gradient's share, normalized by the Stokes drag at the
+  superficial slip velocity eps w (3 pi mu d eps w): at low Re a packed bed's gradient is then
+  Carman-Kozeny's 180 mu phi^2 U / (eps^3 d^2) (the first term), and one sphere's drag Stokes's.
 
 Heat exchange h [W/(m^2 K)] from the Nusselt number Nu = h d / k_g:
 * RANZ_MARSHALL (Ranz & Marshall 1952; source 1): Nu = 2 + 0.6 Re_p^1/2 Pr^1/3, Re_p = rho w d / mu.
@@ -23,8 +31,8 @@ import math
 
 import taichi as ti
 
-GIDASPOW, DI_FELICE = 0, 1
-DRAG_IDS = {"gidaspow": GIDASPOW, "di_felice": DI_FELICE}
+GIDASPOW, DI_FELICE, BEETSTRA = 0, 1, 2
+DRAG_IDS = {"gidaspow": GIDASPOW, "di_felice": DI_FELICE, "beetstra": BEETSTRA}
 RANZ_MARSHALL, GUNN = 0, 1
 NUSSELT_IDS = {"ranz_marshall": RANZ_MARSHALL, "gunn": GUNN}
 PI = math.pi
@@ -48,6 +56,14 @@ def make_drag(model: int, rho: float, mu: float):
                     cd_re = 24.0 * (1.0 + 0.15 * re**0.687)
                 beta = 0.75 * cd_re * (1.0 - eps) * mu / (d * d) * eps**-2.65
             k = vol * beta / ti.max(1.0 - eps, 1e-12)
+        elif ti.static(model == BEETSTRA):
+            phi = 1.0 - eps
+            viscous = 10.0 * phi / (eps * eps) + eps * eps * (1.0 + 1.5 * ti.sqrt(phi))
+            a = 0.5 * (1.0 + 4.0 * phi)  # the inertial term times Re^a over Re^a, finite at Re = 0
+            re_a = re**a
+            inertial = 0.413 / (24.0 * eps * eps) * (re / eps + 3.0 * eps * phi * re + 8.4 * re**0.657) \
+                * re_a / (re_a + 10.0 ** (3.0 * phi))
+            k = 3.0 * PI * mu * d * eps * (viscous + inertial)
         else:
             re_s = ti.max(re, 1e-12)
             cd_w = (0.63 * ti.sqrt(w) + 4.8 * ti.sqrt(mu / (eps * rho * d))) ** 2  # C_D w, finite at w = 0
