@@ -1,9 +1,11 @@
-"""One Taichi initialisation (CPU, float64) per test process, and scene helpers.
+"""A fresh Taichi program (CPU, float64) for each test, and scene helpers.
 
 The suite compiles the kernels of many small scenes once each, so it compiles them without
 Taichi's IR optimization (`TIDEM_COMPILE=fast`, see `tidem/runtime/startup.py`): a third of the compile
 time for the same kernels. README's test command runs two pytest-xdist
-workers, because compiling is single-threaded.
+workers, because compiling is single-threaded. Each test starts on a fresh Taichi program
+(`fresh_taichi`), so that the kernels of a scene another test (in either worker) built first come
+from Taichi's kernel cache.
 """
 
 import copy
