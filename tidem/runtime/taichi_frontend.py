@@ -14,8 +14,6 @@ only, so no computed value changes; it is installed only where Taichi has the me
 
 from __future__ import annotations
 
-_installed = False
-
 
 def position(self, node) -> str:
     """Where `node` is: `File "...", line N, in kernel:` and that line's code (the context's source)."""
@@ -25,9 +23,6 @@ def position(self, node) -> str:
 
 def install() -> bool:
     """Put `position` in place of Taichi's `get_pos_info`; True when it is in place."""
-    global _installed
-    if _installed:
-        return True
     try:
         from taichi.lang.ast.ast_transformer_utils import ASTTransformerContext
     except ImportError:  # another Taichi: keep its own
@@ -35,5 +30,4 @@ def install() -> bool:
     if not callable(getattr(ASTTransformerContext, "get_pos_info", None)):
         return False
     ASTTransformerContext.get_pos_info = position
-    _installed = True
     return True
