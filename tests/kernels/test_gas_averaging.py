@@ -73,7 +73,7 @@ def test_no_filter_where_the_cells_are_coarser_than_half_the_length():
 
 
 def test_a_packed_beds_gradient_stays_ergun(solver_for):
-    s = solver_for(packed_column(0.3, averaging_length=0.012))
+    s = solver_for(packed_column(0.3))  # the default, 12 d
     for _ in range(30):
         s.step()
     eps = 1 - s.gas.G.solid_vol.to_numpy()[:, :, 1:4].sum() / (0.008 * 0.008 * 0.012)
@@ -88,15 +88,32 @@ def seen_voidage(solver_for, x, cell, length):
 
 
 def test_the_voidage_a_grain_sees_hangs_less_on_the_cell(solver_for):
-    """A bed with a 6 mm bubble: the voidage each grain sees on cells of 3 and 5 grain diameters. Without a
-    length the two differ by the cells' own averaging (RMS 0.011); at L = 12 d by the remaining shape of the
+    """A bed with a 6 mm bubble: the voidage each grain sees on cells of 3 and 5 grain diameters. Over the cells'
+    own averaging ("cells") the two differ by it (RMS 0.011); at the default L = 12 d by the remaining shape of the
     kernels only (RMS 0.0027)."""
     x = lattice_bed(hole=(0.015, 0.03, 0.006))
-    plain = np.sqrt(np.mean((seen_voidage(solver_for, x, 0.003, None) - seen_voidage(solver_for, x, 0.005, None))**2))
-    kept = np.sqrt(np.mean((seen_voidage(solver_for, x, 0.003, 0.012) - seen_voidage(solver_for, x, 0.005, 0.012))**2))
-    assert kept < 0.4 * plain  # measured: RMS 0.0107 without, 0.0027 with
+    plain = np.sqrt(np.mean((seen_voidage(solver_for, x, 0.003, "cells") - seen_voidage(solver_for, x, 0.005, "cells"))**2))
+    kept = np.sqrt(np.mean((seen_voidage(solver_for, x, 0.003, None) - seen_voidage(solver_for, x, 0.005, None))**2))
+    assert kept < 0.4 * plain  # measured: RMS 0.0107 over the cells, 0.0027 at 12 d
 
 
-def test_without_a_length_the_cells_average_alone(solver_for):
-    s = solver_for(fixed_grains([[0.015, 0.002, 0.02]], 0.003, None))
+def test_cells_average_alone_over_the_cells_own_reach(solver_for):
+    s = solver_for(fixed_grains([[0.015, 0.002, 0.02]], 0.003, "cells"))
     assert s.gas.filters == (None, None)
+
+
+def test_the_default_length_is_twelve_diameters_of_the_largest_grain():
+    """No key: 12 diameters of the largest grain of any group, the grains of a parcel and not the parcel (so a
+    bed of grains and one of k = 3 parcels average alike); "cells": the cells' own averaging; a length given
+    holds."""
+    from tidem.gas.geometry import averaging_length
+    from tidem.scene.load import validate
+
+    raw = packed_column(0.1)
+    raw["particles"].append({"name": "big", "material": "sand", "diameter": {"value": 0.0015}, "coarse_grain": 1.3,
+                             "positions": [[0.004, 0.004, 0.03]]})
+    assert averaging_length(validate(raw).scene) == pytest.approx(0.018, rel=1e-12)
+    raw["gas"]["averaging_length"] = "cells"
+    assert averaging_length(validate(raw).scene) is None
+    raw["gas"]["averaging_length"] = 0.02
+    assert averaging_length(validate(raw).scene) == 0.02

@@ -15,6 +15,9 @@ from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
 from tidem.kernels.gas_smoothing import plan_filter
+from tidem.scene.sizes import largest_grain
+
+AVERAGING_GRAINS = 12.0  # the default averaging length in grain diameters (docs/design/averaging_length.md, section 4)
 
 
 def gas_grid(scene) -> GasGrid:
@@ -208,6 +211,18 @@ def voidage_layers(model) -> int:
     particle (parcel) diameter high, the Sauter mean of the scene's particles, at least 1; 1 with
     `gas.voidage = "cell"`."""
     return layers_for(model.scene, sauter_diameter(2.0 * model.radius))
+
+
+def averaging_length(scene) -> float | None:
+    """The length the voidage is averaged over [m] (`gas.averaging_length`): the key's length, None for the cells'
+    own ("cells"), and by default 12 diameters of the largest grain (a parcel's grains, not the parcel)."""
+    length = scene.gas.averaging_length
+    if length == "cells":
+        return None
+    if length is not None:
+        return length
+    grain = largest_grain(scene)
+    return None if grain is None else AVERAGING_GRAINS * grain
 
 
 def voidage_filters(gg, length: float | None, layers: int):

@@ -20,8 +20,8 @@ import taichi as ti
 
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas.fields import allocate_gas_fields
-from tidem.gas.geometry import (convection_walls, gas_grid, gas_walls, inlet_parts, sauter_diameter, voidage_filters,
-                                voidage_layers)
+from tidem.gas.geometry import (averaging_length, convection_walls, gas_grid, gas_walls, inlet_parts, sauter_diameter,
+                                voidage_filters, voidage_layers)
 from tidem.gas.limits import MAX_COURANT, inlet_velocities
 from tidem.gas.open_volume import open_volumes
 from tidem.gas.species import M_O2, o2_mass_fraction
@@ -81,7 +81,7 @@ class GasPhase:
         self._wall_T = (walls["wall_T"].copy(), walls["wall_k"], walls["wall_A"] > 0.0) if self.walls else None
         self.layers = voidage_layers(model)
         self.open = open_volumes(gg, self.solid, self.kinds, model.tubes, self.cut, self.layers)
-        self.filters = voidage_filters(gg, gas.averaging_length, self.layers)
+        self.filters = voidage_filters(gg, averaging_length(scene), self.layers)
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
         n_walls = len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0)  # wall_k of mesh k: tubes + k
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, n_walls, self.heat,

@@ -5,8 +5,9 @@ run)."""
 
 import math
 
-from tidem.gas.geometry import convection_walls, gas_grid, voidage_layers
+from tidem.gas.geometry import averaging_length, convection_walls, gas_grid, voidage_layers
 from tidem.kernels.gas_band import band_width
+from tidem.kernels.gas_smoothing import plan_filter
 from tidem.runner.output_size import cadence
 
 LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
@@ -73,8 +74,14 @@ def gas_line(model) -> str:
     width = band_width(gg, cpu=True)
     cg = f"Jacobi-preconditioned CG (tolerance {gas.tolerance:g}, at most {gas.max_iterations} iterations)"
     solve = (f"directly on the CPU (banded Cholesky, half-bandwidth {width} cells), by {cg} on a GPU" if width else f"by {cg}")
-    averaged = (f"averaged over {gas.averaging_length:g} m (gas.averaging_length)" if gas.averaging_length else
-                "averaged over two cells (the cells' own; gas.averaging_length sets a length apart from them)")
+    length = averaging_length(model.scene)
+    key = "gas.averaging_length" if gas.averaging_length is not None else "12 grain diameters, the default"
+    if length is None:
+        averaged = "averaged over two cells (the cells' own: gas.averaging_length = \"cells\")"
+    elif plan_filter(gg.h, gg.cells, length) is None:
+        averaged = f"averaged over two cells, already longer than the averaging length {length:g} m ({key})"
+    else:
+        averaged = f"averaged over {length:g} m ({key})"
     return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
             f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + f", {averaged}; "
             f"pressure solved {solve}")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from tidem.scene.heat_checks import heat_checks
 from tidem.scene.schedule import is_scheduled
 from tidem.scene.schema import Scene
-from tidem.scene.sizes import largest_diameter, max_diameter
+from tidem.scene.sizes import largest_diameter, largest_grain, max_diameter
 
 AXES = "xyz"
 
@@ -40,13 +40,14 @@ def gas_checks(scene: Scene) -> list[str]:
     if min(sizes) < 2 * dmax:
         errs.append(f"gas.cell_size: cells of {min(sizes):g} m are smaller than 2 particle diameters ({2 * dmax:g} m), "
                     f"so the voidage is not a local average; use cell_size >= {3 * dmax:g} (about 3 diameters)")
-    if gas.averaging_length is not None:
+    if gas.averaging_length not in (None, "cells"):
         counts = [round((dom.max[a] - dom.min[a]) / sizes[a]) for a in range(3)]
         own = 2 * max(h for h, n in zip(sizes, counts) if n > 1)  # eq. (1) of kernels/gas_smoothing.py
         if gas.averaging_length <= own:
             errs.append(f"gas.averaging_length: {gas.averaging_length:g} m is no longer than the averaging of the gas "
                         f"cells themselves (cloud-in-cell over two cells, {own:g} m), so it would change nothing; "
-                        f"give more than {own:g} m (about 12 particle diameters, {12 * dmax:g} m) or remove the key")
+                        f"give more than {own:g} m, or remove the key for the default (12 grain diameters, "
+                        f"{12 * largest_grain(scene):g} m, where longer than the cells' own)")
     for i, z in enumerate(gas.pressure_probes):
         if not dom.min[2] <= z <= dom.max[2]:
             errs.append(f"gas.pressure_probes[{i}]: height {z:g} m lies outside the domain's z range "

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, StrictBool, StrictInt, model_validator
+from pydantic import Field, StrictBool, StrictInt, field_validator, model_validator
 
 from tidem.scene.schedule import ScheduledNonNegative, ScheduledPositive
 from tidem.scene.types import NonNegative, Number, Positive, Strict
@@ -51,7 +51,7 @@ class Gas(Strict):
     initial_temperature: Positive | None = None
     drag: Literal["gidaspow", "di_felice", "beetstra"] = "gidaspow"
     voidage: Literal["layered", "cell"] = "layered"
-    averaging_length: Positive | None = None
+    averaging_length: Positive | Literal["cells"] | None = None
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"
     conduction: StrictBool = True
@@ -61,6 +61,17 @@ class Gas(Strict):
     min_voidage: Number = Field(default=0.3, gt=0, lt=1)
     pressure_probes: list[Number] = []
     oxygen: Oxygen | None = None
+
+    @field_validator("averaging_length", mode="before")
+    @classmethod
+    def _length_or_cells(cls, value):
+        """One message for a bad `averaging_length`, in place of one per branch of the union."""
+        if isinstance(value, bool) or (isinstance(value, str) and value != "cells"):
+            shown = f"the text {value!r}" if isinstance(value, str) else str(value).lower()
+            raise ValueError(f"expected a length in m or \"cells\" (the cells' own averaging), got {shown}")
+        if isinstance(value, (int, float)) and not value > 0:
+            raise ValueError(f"must be > 0 (got {value})")
+        return value
 
 
 class CharCombustion(Strict):

@@ -33,6 +33,12 @@ def parcel_count(group) -> int | None:
     return max(1, round(group.count / group.coarse_grain**3))
 
 
+def largest_grain(scene: Scene) -> float | None:
+    """Largest grain diameter of the scene's groups [m] (the grains a parcel stands for, not the parcel; growing
+    grains at their start), None without particles."""
+    return max((largest_diameter(g.diameter) for g in scene.particles), default=None)
+
+
 def max_diameter(scene: Scene) -> float:
     """Largest particle diameter the scene can simulate [m] (parcels at their coarse-grained
     size), growing particles at their cap (k times the grains' cap for parcels)."""
