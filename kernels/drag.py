@@ -20,6 +20,10 @@ diameter, w = |u - v|, rho and mu the gas density and viscosity.
   F is the drag without the mean pressure gradient's share, normalized by the Stokes drag at the
   superficial slip velocity eps w (3 pi mu d eps w): at low Re a packed bed's gradient is then
   Carman-Kozeny's 180 mu phi^2 U / (eps^3 d^2) (the first term), and one sphere's drag Stokes's.
+* TANG (Tang, Peters, Kuipers, Kriebitzsch & van der Hoef 2015, AIChE J. 61, 688, monodisperse; fitted to
+  immersed-boundary flows through static random arrays, 0.1 <= phi <= 0.6, Re <= 1000): K as BEETSTRA's, with
+    F = 10 phi / eps^2 + eps^2 (1 + 1.5 phi^1/2)
+        + Re (0.11 phi (1 + phi) - 0.00456 / eps^4 + Re^-0.343 (0.169 eps + 0.0644 / eps^4)).
 
 Heat exchange h [W/(m^2 K)] from the Nusselt number Nu = h d / k_g:
 * RANZ_MARSHALL (Ranz & Marshall 1952; source 1): Nu = 2 + 0.6 Re_p^1/2 Pr^1/3, Re_p = rho w d / mu.
@@ -31,8 +35,8 @@ import math
 
 import taichi as ti
 
-GIDASPOW, DI_FELICE, BEETSTRA = 0, 1, 2
-DRAG_IDS = {"gidaspow": GIDASPOW, "di_felice": DI_FELICE, "beetstra": BEETSTRA}
+GIDASPOW, DI_FELICE, BEETSTRA, TANG = 0, 1, 2, 3
+DRAG_IDS = {"gidaspow": GIDASPOW, "di_felice": DI_FELICE, "beetstra": BEETSTRA, "tang": TANG}
 RANZ_MARSHALL, GUNN = 0, 1
 NUSSELT_IDS = {"ranz_marshall": RANZ_MARSHALL, "gunn": GUNN}
 PI = math.pi
@@ -63,6 +67,12 @@ def make_drag(model: int, rho: float, mu: float):
             re_a = re**a
             inertial = 0.413 / (24.0 * eps * eps) * (re / eps + 3.0 * eps * phi * re + 8.4 * re**0.657) \
                 * re_a / (re_a + 10.0 ** (3.0 * phi))
+            k = 3.0 * PI * mu * d * eps * (viscous + inertial)
+        elif ti.static(model == TANG):
+            phi = 1.0 - eps
+            e4 = eps**4
+            viscous = 10.0 * phi / (eps * eps) + eps * eps * (1.0 + 1.5 * ti.sqrt(phi))
+            inertial = re * (0.11 * phi * (1.0 + phi) - 0.00456 / e4) + re**0.657 * (0.169 * eps + 0.0644 / e4)
             k = 3.0 * PI * mu * d * eps * (viscous + inertial)
         else:
             re_s = ti.max(re, 1e-12)

@@ -49,7 +49,7 @@ class Gas(Strict):
     nozzles: list[Nozzle] = []
     inlet_temperature: ScheduledPositive | None = None
     initial_temperature: Positive | None = None
-    drag: Literal["gidaspow", "di_felice", "beetstra"] = "gidaspow"
+    drag: Literal["gidaspow", "di_felice", "beetstra", "tang"] = "gidaspow"
     voidage: Literal["layered", "cell"] = "layered"
     averaging_length: Positive | Literal["cells"] | None = None
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
