@@ -68,9 +68,10 @@ def test_a_settled_beds_whole_pressure_drop_is_ergun_over_its_own_profile(solver
 def test_a_lone_grain_sees_the_cell_voidage_and_a_packed_one_its_layer(solver_for):
     """A grain alone in a cell reads its own volume at the cell scale (S0 = 1 for no neighbours): the same
     voidage as with gas.voidage = "cell", to round-off, over the cells' own averaging (with the averaging
-    length the cells are filtered along z and the layers across only, so the two differ by 0.1 %). In a lattice of touching grains 4 layers high in one
-    4 mm cell (the cells above empty) every grain sees about the lattice's own voidage 1 - pi/6, where the cell
-    voidage gives the top layers the mean of the lattice and the gas above it."""
+    length the cells are filtered along z and the layers across only, so the two differ by 0.1 %). In a lattice
+    of touching grains 4 layers high in one 4 mm cell (the cells above empty) every grain sees about the
+    lattice's own voidage 1 - pi/6, where the cell voidage gives the top layers the mean of the lattice and the
+    gas above it."""
     lone = [[0.0031, 0.0047, 0.0127]]
     seen = {}
     for voidage in ("cell", "layered"):
