@@ -15,9 +15,7 @@ from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
 from tidem.kernels.gas_smoothing import plan_filter
-from tidem.scene.sizes import largest_grain
-
-AVERAGING_GRAINS = 12.0  # the default averaging length in grain diameters (docs/design/averaging_length.md, section 4)
+from tidem.scene.sizes import AVERAGING_GRAINS, largest_grain
 
 
 def gas_grid(scene) -> GasGrid:

@@ -9,6 +9,7 @@ from tidem.gas.geometry import averaging_length, convection_walls, gas_grid, voi
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_smoothing import plan_filter
 from tidem.runner.output_size import cadence
+from tidem.scene.sizes import AVERAGING_GRAINS
 
 LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
 
@@ -75,7 +76,7 @@ def gas_line(model) -> str:
     cg = f"Jacobi-preconditioned CG (tolerance {gas.tolerance:g}, at most {gas.max_iterations} iterations)"
     solve = (f"directly on the CPU (banded Cholesky, half-bandwidth {width} cells), by {cg} on a GPU" if width else f"by {cg}")
     length = averaging_length(model.scene)
-    key = "gas.averaging_length" if gas.averaging_length is not None else "12 grain diameters, the default"
+    key = "gas.averaging_length" if gas.averaging_length is not None else f"{AVERAGING_GRAINS:g} grain diameters, the default"
     if length is None:
         averaged = "averaged over two cells (the cells' own: gas.averaging_length = \"cells\")"
     elif plan_filter(gg.h, gg.cells, length) is None:

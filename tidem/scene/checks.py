@@ -5,7 +5,7 @@ from __future__ import annotations
 from tidem.scene.heat_checks import heat_checks
 from tidem.scene.schedule import is_scheduled
 from tidem.scene.schema import Scene
-from tidem.scene.sizes import largest_diameter, largest_grain, max_diameter
+from tidem.scene.sizes import AVERAGING_GRAINS, largest_diameter, largest_grain, max_diameter
 
 AXES = "xyz"
 
@@ -46,8 +46,8 @@ def gas_checks(scene: Scene) -> list[str]:
         if gas.averaging_length <= own:
             errs.append(f"gas.averaging_length: {gas.averaging_length:g} m is no longer than the averaging of the gas "
                         f"cells themselves (cloud-in-cell over two cells, {own:g} m), so it would change nothing; "
-                        f"give more than {own:g} m, or remove the key for the default (12 grain diameters, "
-                        f"{12 * largest_grain(scene):g} m, where longer than the cells' own)")
+                        f"give more than {own:g} m, or remove the key for the default ({AVERAGING_GRAINS:g} grain diameters, "
+                        f"{AVERAGING_GRAINS * largest_grain(scene):g} m, where longer than the cells' own)")
     for i, z in enumerate(gas.pressure_probes):
         if not dom.min[2] <= z <= dom.max[2]:
             errs.append(f"gas.pressure_probes[{i}]: height {z:g} m lies outside the domain's z range "

@@ -33,6 +33,9 @@ def parcel_count(group) -> int | None:
     return max(1, round(group.count / group.coarse_grain**3))
 
 
+AVERAGING_GRAINS = 12.0  # the default averaging length in grain diameters (docs/design/averaging_length.md, section 4)
+
+
 def largest_grain(scene: Scene) -> float | None:
     """Largest grain diameter of the scene's groups [m] (the grains a parcel stands for, not the parcel; growing
     grains at their start), None without particles."""
