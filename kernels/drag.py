@@ -46,6 +46,11 @@ def make_drag(model: int, rho: float, mu: float):
     """Return drag_coefficient(eps, d, w) -> K [kg/s] for the chosen correlation."""
 
     @ti.func
+    def stokes_part(phi, eps):
+        """BEETSTRA's and TANG's low-Re part of F: 10 phi / eps^2 + eps^2 (1 + 1.5 phi^1/2)."""
+        return 10.0 * phi / (eps * eps) + eps * eps * (1.0 + 1.5 * ti.sqrt(phi))
+
+    @ti.func
     def drag_coefficient(eps, d, w):
         re = eps * rho * w * d / mu
         k = 0.0
@@ -62,18 +67,16 @@ def make_drag(model: int, rho: float, mu: float):
             k = vol * beta / ti.max(1.0 - eps, 1e-12)
         elif ti.static(model == BEETSTRA):
             phi = 1.0 - eps
-            viscous = 10.0 * phi / (eps * eps) + eps * eps * (1.0 + 1.5 * ti.sqrt(phi))
             a = 0.5 * (1.0 + 4.0 * phi)  # the inertial term times Re^a over Re^a, finite at Re = 0
             re_a = re**a
             inertial = 0.413 / (24.0 * eps * eps) * (re / eps + 3.0 * eps * phi * re + 8.4 * re**0.657) \
                 * re_a / (re_a + 10.0 ** (3.0 * phi))
-            k = 3.0 * PI * mu * d * eps * (viscous + inertial)
+            k = 3.0 * PI * mu * d * eps * (stokes_part(phi, eps) + inertial)
         elif ti.static(model == TANG):
             phi = 1.0 - eps
             e4 = eps**4
-            viscous = 10.0 * phi / (eps * eps) + eps * eps * (1.0 + 1.5 * ti.sqrt(phi))
             inertial = re * (0.11 * phi * (1.0 + phi) - 0.00456 / e4) + re**0.657 * (0.169 * eps + 0.0644 / e4)
-            k = 3.0 * PI * mu * d * eps * (viscous + inertial)
+            k = 3.0 * PI * mu * d * eps * (stokes_part(phi, eps) + inertial)
         else:
             re_s = ti.max(re, 1e-12)
             cd_w = (0.63 * ti.sqrt(w) + 4.8 * ti.sqrt(mu / (eps * rho * d))) ** 2  # C_D w, finite at w = 0

@@ -217,10 +217,7 @@ def averaging_length(scene) -> float | None:
     length = scene.gas.averaging_length
     if length == "cells":
         return None
-    if length is not None:
-        return length
-    grain = largest_grain(scene)
-    return None if grain is None else AVERAGING_GRAINS * grain
+    return length if length is not None else AVERAGING_GRAINS * largest_grain(scene)
 
 
 def voidage_filters(gg, length: float | None, layers: int):

@@ -36,10 +36,10 @@ def parcel_count(group) -> int | None:
 AVERAGING_GRAINS = 12.0  # the default averaging length in grain diameters (docs/design/averaging_length.md, section 4)
 
 
-def largest_grain(scene: Scene) -> float | None:
+def largest_grain(scene: Scene) -> float:
     """Largest grain diameter of the scene's groups [m] (the grains a parcel stands for, not the parcel; growing
-    grains at their start), None without particles."""
-    return max((largest_diameter(g.diameter) for g in scene.particles), default=None)
+    grains at their start)."""
+    return max(largest_diameter(g.diameter) for g in scene.particles)
 
 
 def max_diameter(scene: Scene) -> float:
