@@ -89,6 +89,49 @@ def test_parcels_rebound_with_their_grains_restitution(solver_for, law):
     assert ratios[1] == pytest.approx(ratios[0], rel=0.01)
 
 
+@pytest.mark.parametrize("law", ["hertz_mindlin", "hysteretic"])
+def test_kinetic_theory_parcels_rebound_with_the_restitution_that_keeps_their_grains_dissipation(solver_for, law):
+    """contact.parcel_restitution = "kinetic_theory": a head-on impact of two k = 2 parcels of grains with
+    e = 0.9 rebounds with e_p = sqrt(1 - k (1 - e^2)) = 0.787 (Lu et al.'s EMMS-DPM; the grains' own 0.9
+    is 14 % away), and a parcel hitting a wall keeps the wall pair's 0.9; 2 %."""
+    d = 2e-3  # the parcel
+    raw = make_scene(
+        domain={"walls": "auto", "wall_material": "sand"},
+        contact={"model": law, "parcel_restitution": "kinetic_theory"},
+        materials={"sand": {**SAND, "restitution": 0.9}},
+        particles=[{"name": "p", "material": "sand", "diameter": {"value": 1e-3}, "coarse_grain": 2.0,
+                    "positions": [[-0.51 * d, 0, 0], [0.51 * d, 0, 0], [0.1 - 0.51 * d, 0.05, 0]],
+                    "velocities": [[0.5, 0, 0], [-0.5, 0, 0], [0.5, 0, 0]]}],
+        numerics={"dt_fraction": 0.02, "max_overlap": 0.2},
+    )
+    s = solver_for(raw)
+    while s.t < 6 * s.model.scales.contact:  # both impacts over, no other on the way
+        s.step()
+    v = s.state.v.to_numpy()[:, 0]
+    assert -v[0] / 0.5 == pytest.approx(math.sqrt(1 - 2 * (1 - 0.81)), rel=0.02)
+    assert -v[2] / 0.5 == pytest.approx(0.9, rel=0.02)
+
+
+def test_kinetic_theory_parcel_restitution_is_refused_where_it_has_no_value():
+    """k (1 - e^2) >= 1 leaves no restitution that keeps the grains' dissipation; a material's parcels need one k."""
+    from tidem.scene.load import validate
+
+    raw = heated_bed(coarse_grain=2.0)
+    raw["contact"] = {"parcel_restitution": "kinetic_theory"}
+    raw["materials"]["sand"]["restitution"] = 0.7  # 2 (1 - 0.49) = 1.02
+    with pytest.raises(SceneError) as err:
+        validate(raw)
+    assert "k (1 - e^2) = 1.02 must stay below 1; use coarse_grain below 1.96" in str(err.value)
+    raw["materials"]["sand"]["restitution"] = 0.9
+    validate(raw)
+    del raw["heat"]
+    raw["particles"].append({**raw["particles"][0], "name": "q", "coarse_grain": 1.5,
+                             "region": {"min": [0, 0, 0.02], "max": [0.02, 0.02, 0.03]}})
+    with pytest.raises(SceneError) as err:
+        validate(raw)
+    assert "particles[1].coarse_grain: with contact.parcel_restitution" in str(err.value)
+
+
 def heated_bed(**group) -> dict:
     return make_scene(
         domain={"min": [0, 0, 0], "max": [0.02, 0.02, 0.04], "walls": "auto", "gravity": [0, 0, -9.81]},

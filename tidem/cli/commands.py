@@ -213,7 +213,8 @@ def check(
     A scene with errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
     import numpy as np
 
-    from tidem.runner.check_report import gas_line, gas_notes, mesh_convection_lines, output_notes
+    from tidem.runner.check_report import (gas_line, gas_notes, mesh_convection_lines, output_notes,
+                                           parcel_restitution_text)
     from tidem.runner.output_size import output_bytes
     from tidem.scene.schedule import scheduled_keys, summary_line
     from tidem.scene.schema import MAX_CONDUCTION_INTERVAL
@@ -238,7 +239,8 @@ def check(
                                                if f.coarse_grain else ""),
         *([f"coarse graining: parcels of k^3 grains, k = {', '.join(f'{k:g}' for k in np.unique(model.coarse_grain))}; "
            f"{float((model.coarse_grain**3).sum()):.0f} grains"] if f.coarse_grain else []),
-        f"contact law: {loaded.scene.contact.model}; rolling resistance: {'on' if f.rolling else 'off'}",
+        f"contact law: {loaded.scene.contact.model}; rolling resistance: {'on' if f.rolling else 'off'}"
+        + parcel_restitution_text(loaded.scene),
         f"Rayleigh time {sc.rayleigh:.4g} s, contact time {sc.contact:.4g} s, stability limit {sc.limit:.4g} s"
         + (" (does not bind: every particle is fixed)" if model.fixed.all() else "")
         + ("" if f.contacts else " (does not bind: no contacts)"),

@@ -37,11 +37,26 @@ def hysteretic_stiffness_ratio(e: float) -> float:
     return max(0.5 * (lo + hi), 1e-12)
 
 
-def pair_vector(a, b, wall_friction=None, heat=None) -> np.ndarray:
+def kinetic_theory_restitution(e: float, k: float) -> float:
+    """The restitution of a collision between parcels of k^3 grains that dissipates, per volume and at
+    the same granular temperature, what the grains' collisions of restitution e dissipate.
+
+    Kinetic theory's collisional dissipation rate (Lun, Savage, Jeffrey & Chepurniy 1984),
+    Gamma = 12 (1 - e^2) g0 eps_s^2 rho_s theta^(3/2) / (d sqrt(pi)), falls as 1/d at a given solids
+    fraction and theta; matching it for parcels of diameter k d gives
+        1 - e_p^2 = k (1 - e^2),   e_p = sqrt(1 - k (1 - e^2))
+    (the coarse-grained particles' restitution of Lu et al.'s EMMS-DPM; PhasicFlow's "LU" dissipation
+    model). It exists while k (1 - e^2) < 1 (`tidem.scene.checks.coarse_grain_checks` refuses beyond)."""
+    return math.sqrt(1.0 - k * (1.0 - e * e))
+
+
+def pair_vector(a, b, wall_friction=None, heat=None, coarse_grain: float = 1.0) -> np.ndarray:
     """Parameters of a contact between materials a and b (indices in `contact_laws`).
 
     E* and G* combine both bodies; restitution, friction and rolling values are the mean of
     the two materials, except that a wall's or tube's own `friction` replaces both frictions.
+    `coarse_grain` k > 1 (parcels with `contact.parcel_restitution = "kinetic_theory"`) replaces the
+    mean restitution e by `kinetic_theory_restitution(e, k)`.
     With heat: harmonic-mean conductivity (a wall without one takes the particle's), and the
     contact-radius factor (E*_sim / E*_real)^(1/3) for softened moduli (Morris et al. 2016).
     """
@@ -51,6 +66,8 @@ def pair_vector(a, b, wall_friction=None, heat=None) -> np.ndarray:
     g_b = b.youngs_modulus / (2 * (1 + b.poisson_ratio))
     g_star = 1.0 / ((2 - a.poisson_ratio) / g_a + (2 - b.poisson_ratio) / g_b)
     e = 0.5 * (a.restitution + b.restitution)
+    if coarse_grain != 1.0:
+        e = kinetic_theory_restitution(e, coarse_grain)
     ln_e = math.log(e) if e < 1.0 else 0.0
     nu = 0.5 * (a.poisson_ratio + b.poisson_ratio)
     dyn_a = a.friction if a.dynamic_friction is None else a.dynamic_friction
@@ -97,16 +114,29 @@ def hysteretic_floor_errors(scene) -> list[str]:
 
 def parameter_tables(scene, mat_names: list[str], surfaces: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     """The material-pair table [P, P, N_PARAMS] and the material-surface table
-    [P, max(surfaces, 1), N_PARAMS] (surfaces: planes, then tubes)."""
+    [P, max(surfaces, 1), N_PARAMS] (surfaces: planes, then tubes). With
+    `contact.parcel_restitution = "kinetic_theory"` a pair of materials whose groups are parcels takes
+    the restitution of `kinetic_theory_restitution` at the mean of the two materials' k (one k per
+    material, `tidem.scene.checks.coarse_grain_checks`); walls and tubes keep the materials' own."""
     mats = scene.materials
     P = len(mat_names)
+    k = parcel_ratios(scene)
     pair = np.zeros((P, P, cl.N_PARAMS))
     for a, na in enumerate(mat_names):
         for b, nb in enumerate(mat_names):
-            pair[a, b] = pair_vector(mats[na], mats[nb], heat=scene.heat)
+            k_pair = 0.5 * (k[na] + k[nb]) if na in k and nb in k else 1.0  # a pair of particle materials
+            pair[a, b] = pair_vector(mats[na], mats[nb], heat=scene.heat, coarse_grain=k_pair)
     surf = np.zeros((P, max(len(surfaces), 1), cl.N_PARAMS))
     for a, na in enumerate(mat_names):
         for s, sd in enumerate(surfaces):
             surf[a, s] = pair_vector(mats[na], mats[sd["material"]], sd["friction"], scene.heat)
             surf[a, s, cl.E_J] = 0.0  # a wall is a body of infinite size for the linear laws
     return pair, surf
+
+
+def parcel_ratios(scene) -> dict[str, float]:
+    """{material: k of its groups} under `contact.parcel_restitution = "kinetic_theory"`; empty under
+    "grains" (every pair keeps its materials' restitution)."""
+    if scene.contact.parcel_restitution != "kinetic_theory":
+        return {}
+    return {g.material: g.coarse_grain for g in scene.particles}

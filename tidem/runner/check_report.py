@@ -1,5 +1,5 @@
-"""What `tidem check` prints beyond the model's own numbers: the gas grid and how its pressure is
-solved, the heated meshes' gas convection, and notes on settings a run would not honour as asked
+"""What `tidem check` prints beyond the model's own numbers: the parcels' restitution, the gas grid and how
+its pressure is solved, the heated meshes' gas convection, and notes on settings a run would not honour as asked
 (a gas grid too coarse for the bed, more snapshots than steps, an interval past t_end, a very long
 run)."""
 
@@ -8,10 +8,20 @@ import math
 from tidem.gas.geometry import averaging_length, convection_walls, gas_grid, voidage_layers
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_smoothing import plan_filter
+from tidem.particles.contact_params import kinetic_theory_restitution, parcel_ratios
 from tidem.runner.output_size import cadence
 from tidem.scene.sizes import AVERAGING_GRAINS
 
 LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
+
+
+def parcel_restitution_text(scene) -> str:
+    """`tidem check`'s words on the parcels' restitution under `contact.parcel_restitution = "kinetic_theory"`
+    (each particle material with parcels: its e and the parcels' e_p); empty under "grains"."""
+    parcels = {m: k for m, k in parcel_ratios(scene).items() if k != 1.0}
+    shown = [f"{m} {scene.materials[m].restitution:g} -> {kinetic_theory_restitution(scene.materials[m].restitution, k):.3g} "
+             f"(k = {k:g})" for m, k in parcels.items()]
+    return f"; parcel restitution (kinetic theory): {', '.join(shown)}" if shown else ""
 
 
 def mesh_convection_lines(model) -> list[str]:

@@ -16,11 +16,45 @@ def coarse_grain_checks(scene: Scene) -> list[str]:
     has no consistent law (a pair's spot and lens scale with one k), so a scene with [heat]
     needs one k for all its groups."""
     ks = {g.coarse_grain for g in scene.particles}
+    errors = parcel_restitution_checks(scene)
     if scene.heat is None or len(ks) == 1:
-        return []
+        return errors
     listed = ", ".join(f"particles[{i}].coarse_grain = {g.coarse_grain:g}" for i, g in enumerate(scene.particles))
-    return [f"particles[*].coarse_grain: with [heat] every group needs the same coarse_grain ({listed}); conduction "
-            "between parcels of different size ratios has no consistent scaling; give all groups one value"]
+    return errors + [f"particles[*].coarse_grain: with [heat] every group needs the same coarse_grain ({listed}); "
+                     "conduction between parcels of different size ratios has no consistent scaling; give all groups "
+                     "one value"]
+
+
+def parcel_restitution_checks(scene: Scene) -> list[str]:
+    """`contact.parcel_restitution = "kinetic_theory"` sets each pair of particle materials the restitution
+    e_p = sqrt(1 - k (1 - e^2)) (`tidem.particles.contact_params.kinetic_theory_restitution`): one k per
+    material, and k (1 - e^2) below 1, where e_p exists."""
+    if scene.contact.parcel_restitution != "kinetic_theory":
+        return []
+    key = 'contact.parcel_restitution = "kinetic_theory"'
+    k: dict[str, float] = {}
+    errors = []
+    for i, g in enumerate(scene.particles):
+        if g.material not in scene.materials:  # named by cross_checks
+            continue
+        if k.setdefault(g.material, g.coarse_grain) != g.coarse_grain:
+            errors.append(f"particles[{i}].coarse_grain: with {key} the parcels of one material need one k "
+                          f"(materials.{g.material} has k = {k[g.material]:g} and {g.coarse_grain:g}); "
+                          "give the groups one coarse_grain or each its own material")
+    if errors:
+        return errors
+    mats = scene.materials
+    for a in sorted(k):
+        for b in sorted(k):
+            e = 0.5 * (mats[a].restitution + mats[b].restitution)
+            k_pair = 0.5 * (k[a] + k[b])
+            if a <= b and k_pair * (1 - e * e) >= 1.0:
+                named = f"materials.{a}" if a == b else f"materials.{a} with materials.{b}"
+                errors.append(f"particles[*].coarse_grain: with {key} parcels of k = {k_pair:g} and restitution "
+                              f"{e:g} ({named}) have no restitution that dissipates what their "
+                              f"grains do: k (1 - e^2) = {k_pair * (1 - e * e):.3g} must stay below 1; use "
+                              f"coarse_grain below {1 / (1 - e * e):.3g} or contact.parcel_restitution = \"grains\"")
+    return errors
 
 
 def gas_checks(scene: Scene) -> list[str]:

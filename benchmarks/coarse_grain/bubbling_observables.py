@@ -1,0 +1,146 @@
+"""The observables of a developed bubbling bed, per run, over a window (issue's coarse-graining list).
+
+    python benchmarks/coarse_grain/bubbling_observables.py T_START RUN_DIR[=LABEL] ... [--csv OUT.csv]
+
+For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 0.02 s or so:
+`--set output.interval=0.02`), over the window from T_START to the run's end:
+- `height_mm`: time mean of the height under which 99 % of the solids' volume lies, each particle a
+  sphere whose volume is spread over its own height (unbiased by the parcel size), from the snapshots;
+- `com_mm`: time mean of the bed's centre of mass, potential energy / (M g), from timeseries.csv;
+- `dp_std_Pa`, `dp_freq_Hz`: standard deviation of the gas pressure drop and the frequency of its
+  spectrum's peak above 0.5 Hz (de-meaned, Hann window), from timeseries.csv;
+- `theta_mm2_s2`: granular temperature per grain, theta = sum m |v - u_cell|^2 / (3 sum m), u_cell the
+  mass-weighted mean velocity of the cell (cubes of CELL, across the periodic depth), each cell's sum
+  scaled by n / (n - 1) for its n particles (an unbiased variance); a parcel's grains move with it, so
+  the parcel's fluctuation is its grains';
+- `dispersion_mm2_s`: vertical dispersion coefficient D_z = slope of <(z(t + tau) - z(t))^2> / 2 over lags
+  tau of LAGS, particles followed by id (a mixing rate);
+- `alpha_W_m2K`, `tube_heat_W`: time means of the tube's alpha and heat flow, from timeseries.csv.
+Prints one Markdown row per run; `--csv` also writes them.
+"""
+
+from __future__ import annotations
+
+import csv
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from tidem.io.vtp import read_vtp
+
+GRAVITY = 9.81
+BED_MASS = 0.03665  # kg: bubbling_tube_slab.toml's 28 000 grains of 1 mm sand at 2500 kg/m^3
+CELL = 0.006  # m: the slab's gas cell
+LAGS = (0.02, 0.04, 0.06, 0.08, 0.1)  # s
+COLUMNS = ("height_mm", "com_mm", "dp_std_Pa", "dp_freq_Hz", "theta_mm2_s2", "dispersion_mm2_s",
+           "alpha_W_m2K", "tube_heat_W")
+
+
+def solids_top(z: np.ndarray, r: np.ndarray, share: float = 0.99) -> float:
+    """The height under which `share` of the spheres' volume lies (exact sphere caps, bisection)."""
+    total = (4.0 / 3.0 * np.pi * r**3).sum()
+    lo, hi = float((z - r).min()), float((z + r).max())
+    for _ in range(50):
+        level = 0.5 * (lo + hi)
+        h = np.clip(level - (z - r), 0.0, 2 * r)
+        if (np.pi * h * h * (3 * r - h) / 3).sum() < share * total:
+            lo = level
+        else:
+            hi = level
+    return 0.5 * (lo + hi)
+
+
+def granular_temperature(x: np.ndarray, v: np.ndarray, m: np.ndarray) -> float:
+    """theta [m^2/s^2] about each cell's mass-weighted mean velocity (n / (n - 1) per cell)."""
+    cell = np.floor(x / CELL).astype(np.int64)
+    _, key = np.unique(cell, axis=0, return_inverse=True)
+    key = key.ravel()
+    n = np.bincount(key)
+    msum = np.bincount(key, m)
+    mean = np.stack([np.bincount(key, m * v[:, c]) for c in range(3)], axis=1) / msum[:, None]
+    dev = (m * ((v - mean[key]) ** 2).sum(axis=1))
+    per_cell = np.bincount(key, dev)
+    keep = n >= 2
+    scaled = per_cell[keep] * n[keep] / (n[keep] - 1)
+    return float(scaled.sum() / (3 * msum[keep].sum()))
+
+
+def snapshots(run: Path, t_start: float) -> list[tuple[float, Path]]:
+    root = ET.parse(run / "snapshots.pvd").getroot()
+    found = [(float(d.get("timestep")), run / d.get("file")) for d in root.iter("DataSet")]
+    return [(t, p) for t, p in found if t >= t_start - 1e-9]
+
+
+def dispersion(times: np.ndarray, z_by_id: list[dict[int, float]]) -> float:
+    """D_z [m^2/s]: least-squares slope of the mean square vertical displacement over LAGS, halved."""
+    dt = float(np.median(np.diff(times)))
+    lags, msd = [], []
+    for lag in LAGS:
+        step = int(round(lag / dt))
+        if step < 1 or step >= len(times):
+            continue
+        sq = []
+        for a in range(len(times) - step):
+            za, zb = z_by_id[a], z_by_id[a + step]
+            ids = za.keys() & zb.keys()
+            sq.append(np.mean([(zb[i] - za[i]) ** 2 for i in ids]))
+        lags.append(step * dt)
+        msd.append(np.mean(sq))
+    return float(np.polyfit(lags, msd, 1)[0] / 2) if len(lags) >= 2 else float("nan")
+
+
+def observe(run: Path, t_start: float) -> dict[str, float]:
+    rows = list(csv.DictReader(open(run / "timeseries.csv")))
+    col = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+    t = col["time_s"]
+    win = t >= t_start
+    dp = col["gas_pressure_drop_Pa"][win]
+    dt = float(np.median(np.diff(t[win])))
+    freq = np.fft.rfftfreq(1 << 15, dt)
+    power = np.abs(np.fft.rfft((dp - dp.mean()) * np.hanning(len(dp)), 1 << 15)) ** 2
+    band = freq > 0.5
+    heights, thetas, times, z_by_id = [], [], [], []
+    for ts, path in snapshots(run, t_start):
+        x, data = read_vtp(path)
+        r = data["radius"]
+        heights.append(solids_top(x[:, 2], r))
+        thetas.append(granular_temperature(x, data["velocity"], r**3))
+        times.append(ts)
+        z_by_id.append(dict(zip(data["id"].tolist(), x[:, 2].tolist())))
+    return {
+        "height_mm": 1e3 * float(np.mean(heights)),
+        "com_mm": 1e3 * float(np.mean(col["potential_energy_J"][win]) / (BED_MASS * GRAVITY)),
+        "dp_std_Pa": float(dp.std()),
+        "dp_freq_Hz": float(freq[band][np.argmax(power[band])]),
+        "theta_mm2_s2": 1e6 * float(np.mean(thetas)),
+        "dispersion_mm2_s": 1e6 * dispersion(np.array(times), z_by_id),
+        "alpha_W_m2K": float(np.mean(col["tubes0_alpha_W_m2K"][win])),
+        "tube_heat_W": float(np.mean(col["tubes0_heat_W"][win])),
+    }
+
+
+def main(argv: list[str]) -> None:
+    out = None
+    if "--csv" in argv:
+        i = argv.index("--csv")
+        out = Path(argv[i + 1])
+        argv = argv[:i] + argv[i + 2:]
+    t_start = float(argv[0])
+    print("| run | " + " | ".join(COLUMNS) + " |\n|" + "---|" * (len(COLUMNS) + 1))
+    rows = []
+    for spec in argv[1:]:
+        path, _, label = spec.partition("=")
+        obs = observe(Path(path), t_start)
+        rows.append({"run": label or path, **obs})
+        print(f"| {label or path} | " + " | ".join(f"{obs[c]:.4g}" for c in COLUMNS) + " |", flush=True)
+    if out is not None:
+        with open(out, "w", newline="") as f:
+            w = csv.DictWriter(f, ["run", *COLUMNS])
+            w.writeheader()
+            w.writerows(rows)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
