@@ -148,3 +148,10 @@ class FieldCopier:
                 s = self.slots[name]
                 buf[s.offset:s.offset + s.size] = np.asarray(arrays[name], np_type).reshape(-1)
             self._kernel(dtype, False)(buf)
+
+
+def write_fields(values: dict[str, tuple[Field, object]]) -> None:
+    """{name: (field, values)}: each field its array, or one number for all its values, in one launch per
+    element type (Taichi's from_numpy and fill compile a kernel for every field)."""
+    copier = FieldCopier({name: field for name, (field, _) in values.items()})
+    copier.write({name: np.broadcast_to(value, copier.shape(name)) for name, (_, value) in values.items()})

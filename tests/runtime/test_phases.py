@@ -38,10 +38,10 @@ def test_a_sampled_profile_shares_the_steps_time_out_as_its_sampled_steps_do():
     timer.lap("output", timer.begin_output() - 2.0)
     table = timer.table(steps=8)
     assert table["total"]["sampled_steps"] == 2
-    assert table["total"]["seconds"] == pytest.approx(34.0, abs=1e-3)
+    assert table["total"]["seconds"] == pytest.approx(34.0, abs=1e-2)  # the laps' own wall time: under 1e-2 s on a loaded machine
     assert table["forces and kick"]["seconds"] == pytest.approx(8.0, abs=1e-2)
     assert table["pressure solve"]["seconds"] == pytest.approx(24.0, abs=1e-2)
-    assert table["output"]["seconds"] == pytest.approx(2.0, abs=1e-3)
+    assert table["output"]["seconds"] == pytest.approx(2.0, abs=1e-2)
     assert "kick-drift" not in table
 
 

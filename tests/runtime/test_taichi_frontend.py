@@ -33,3 +33,30 @@ def test_a_kernel_that_fails_to_compile_is_named_by_file_line_and_code():
     assert "in broken:" in message
     assert f", line {line}," in message
     assert "^^^" not in message  # no caret row: the light message
+
+
+def test_a_factorys_kernels_read_their_source_once_and_keep_their_own_closures():
+    """Kernels and Taichi functions made by a factory share a code object: the frontend reads its source
+    once (`taichi_frontend._source`), and each kernel still takes its own closure's values."""
+    from taichi.lang import kernel_impl
+
+    assert kernel_impl._get_tree_and_ctx is taichi_frontend.tree_and_context
+
+    def make(step):
+        @ti.func
+        def advanced(v):
+            return v + step
+
+        @ti.kernel
+        def advance(x: ti.template()):
+            for i in x:
+                x[i] = advanced(x[i])
+
+        return advance
+
+    x = ti.field(ti.f64, 3)
+    make(1.0)(x)
+    make(2.0)(x)
+    assert x.to_numpy().tolist() == [3.0, 3.0, 3.0]
+    read = [key for key in taichi_frontend._sources if getattr(key, "co_name", "") in ("advanced", "advance")]
+    assert len(read) == 2  # one per code object, not per kernel made

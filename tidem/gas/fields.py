@@ -28,6 +28,7 @@ from types import SimpleNamespace
 import numpy as np
 import taichi as ti
 
+from tidem.kernels.field_copy import write_fields
 from tidem.kernels.gas_grid import GasGrid
 
 
@@ -114,22 +115,17 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         G.bsum = ti.field(ti.f64)
         fb.dense(ti.i, 3).place(G.bsum)
     tree = fb.finalize()
-    G.solid.from_numpy(solid)
+    start = {"solid": (G.solid, solid), "eps": (G.eps, 1.0), "eps_old": (G.eps_old, 1.0),
+             **{f"kind{c}": (G.kind[c], kinds[c]) for c in range(3)}}
     if open_volumes is not None:
-        G.open.from_numpy(open_volumes["cells"])
-        for c in range(3):
-            G.open_face[c].from_numpy(open_volumes[f"faces{c}"])
+        start["open"] = (G.open, open_volumes["cells"])
+        start.update({f"open_face{c}": (G.open_face[c], open_volumes[f"faces{c}"]) for c in range(3)})
         if layers > 1:
-            G.open_layer.from_numpy(open_volumes["layers"])
+            start["open_layer"] = (G.open_layer, open_volumes["layers"])
     if cut is not None:
-        G.part.from_numpy(cut.open_fraction)
-        for c in range(3):
-            G.aperture[c].from_numpy(cut.aperture[c])
+        start["part"] = (G.part, cut.open_fraction)
+        start.update({f"aperture{c}": (G.aperture[c], cut.aperture[c]) for c in range(3)})
     if walls is not None:
-        for name, values in walls.items():
-            getattr(G, name).from_numpy(values)
-    for c in range(3):
-        G.kind[c].from_numpy(kinds[c])
-    G.eps.fill(1.0)
-    G.eps_old.fill(1.0)
+        start.update({name: (getattr(G, name), values) for name, values in walls.items()})
+    write_fields(start)
     return G, tree

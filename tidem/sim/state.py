@@ -75,7 +75,7 @@ from tidem.kernels.geometry import slab_layout
 from tidem.kernels.ordered import in_order
 from tidem.kernels.reactions import booked_slots
 from tidem.sim.model import Model
-from tidem.sim.state_fill import fill_heat, fill_particles, fill_surfaces
+from tidem.sim.state_fill import fill
 from tidem.walls.mesh_bins import MESH_SLOTS
 
 
@@ -316,8 +316,5 @@ def allocate(model: Model) -> State:
     p.place((5,), "sums")
     p.place((2,), "worst_at", ti.i32)  # first non-finite position, largest overlap (storage indices)
     S._tree = p.fb.finalize()
-    fill_particles(S, model)
-    if feat.heat:
-        fill_heat(S, model)
-    fill_surfaces(S, model)
+    fill(S, model)
     return S

@@ -9,6 +9,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from tidem.kernels.field_copy import write_fields
 from tidem.sim.model import Model
 from tidem.walls.surfaces import angle_bin_area
 
@@ -31,88 +32,88 @@ def wall_foil_vector(plane: dict, model: Model) -> list[float]:
     return [plane["flux"], plane["foil_C"], area]
 
 
-def fill_particles(S: SimpleNamespace, model: Model) -> None:
+def particle_values(S: SimpleNamespace, model: Model) -> dict:
     """Start positions, velocities and sizes; fixed particles get zero inverse mass and inertia."""
     feat = model.features
     N = model.capacity
     radius = model.radius
     inertia = 0.4 * model.mass * radius**2
     movable = ~model.fixed  # fixed particles: zero inverse mass and inertia, zero velocity
-    S.x.from_numpy(model.x0)
-    S.x_build.from_numpy(model.x0)
-    S.v.from_numpy(model.v0 * movable[:, None])
-    S.radius.from_numpy(radius)
+    values = {"x": model.x0, "x_build": model.x0, "v": model.v0 * movable[:, None], "radius": radius,
+              "mass": model.mass, "inv_mass": movable / model.mass, "inv_inertia": movable / inertia,
+              "mat": model.material, "active": model.active0, "ident": np.arange(N), "wid": -1}
     if feat.growth:
-        S.r_build.from_numpy(radius)
-    S.mass.from_numpy(model.mass)
-    S.inv_mass.from_numpy(movable / model.mass)
-    S.inv_inertia.from_numpy(movable / inertia)
-    S.mat.from_numpy(model.material)
+        values["r_build"] = radius
     if feat.reactions:
-        S.rx.from_numpy(model.reaction_index)
+        values["rx"] = model.reaction_index
         if "sublimation" in feat.reactions:
-            S.rt0.fill(-1.0)
-            S.rt1.fill(0.0)
-    S.active.from_numpy(model.active0.astype(np.int32))
+            values.update(rt0=-1.0, rt1=0.0)
     if feat.coarse_grain and feat.gas:
-        S.cg.from_numpy(model.coarse_grain)
-    S.ident.from_numpy(np.arange(N, dtype=np.int32))
-    S.wid.fill(-1)
+        values["cg"] = model.coarse_grain
     if feat.contact_time:
-        S.touch_start.fill(-1.0)
-        S.touch_end.fill(-1.0)
+        values.update(touch_start=-1.0, touch_end=-1.0)
+    return values
 
 
-def fill_heat(S: SimpleNamespace, model: Model) -> None:
+def heat_values(S: SimpleNamespace, model: Model) -> dict:
     """Start temperatures, 1/(m c), fixed surface temperatures, foils and the tubes' side vectors."""
     feat = model.features
-    S.T.from_numpy(model.temperature0)
-    S.inv_heat_cap.from_numpy(1.0 / model.heat_capacity)
     T0 = model.scene.heat.initial_temperature  # a foil's own temperature is in tube_bin_T
     temps = [T0 if s.get("flux") is not None else s["T"] for s in model.planes + model.tubes]
     temps += [m.temperature for m in model.meshes]
-    S.surf_T.from_numpy(np.array([-1.0 if T is None else T for T in temps] or [-1.0]))
+    values = {"T": model.temperature0, "inv_heat_cap": 1.0 / model.heat_capacity,
+              "surf_T": np.array([-1.0 if T is None else T for T in temps] or [-1.0])}
     if feat.foil:
-        S.tube_foil.from_numpy(np.array([foil_vector(t, model) for t in model.tubes]))
-        S.tube_bin_T.fill(T0)
+        values.update(tube_foil=np.array([foil_vector(t, model) for t in model.tubes]), tube_bin_T=T0)
     if feat.wall_foil:
-        S.plane_foil.from_numpy(np.array([wall_foil_vector(p, model) for p in model.planes]))
-        S.plane_foil_T.fill(T0)
+        values.update(plane_foil=np.array([wall_foil_vector(p, model) for p in model.planes]), plane_foil_T=T0)
     if model.angle_bins:
-        S.tube_side.from_numpy(np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0]
-                                         for t in model.tubes]))
+        values["tube_side"] = np.array([[0.0, 1.0, 0.0] if t["mask"][1] else [1.0, 0.0, 0.0] for t in model.tubes])
+    return values
 
 
-def fill_surfaces(S: SimpleNamespace, model: Model) -> None:
-    """The parameter tables and the geometry of the tubes."""
-    S.pp.from_numpy(model.pair_params)
-    S.ps.from_numpy(model.surface_params)
+def surface_values(S: SimpleNamespace, model: Model) -> dict:
+    """The parameter tables and the geometry of the tubes and the meshes."""
+    values = {"pp": model.pair_params, "ps": model.surface_params}
     if model.features.n_meshes:
-        _fill_meshes(S, model)
+        values.update(mesh_values(S, model))
     if model.tubes:
-        S.tube_c.from_numpy(np.array([t["c"] for t in model.tubes], float))
-        S.tube_mask.from_numpy(np.array([t["mask"] for t in model.tubes], float))
-        S.tube_r.from_numpy(np.array([t["r"] for t in model.tubes], float))
+        values.update(tube_c=np.array([t["c"] for t in model.tubes], float),
+                      tube_mask=np.array([t["mask"] for t in model.tubes], float),
+                      tube_r=np.array([t["r"] for t in model.tubes], float))
+    return values
 
 
-def _fill_meshes(S: SimpleNamespace, model: Model) -> None:
+def mesh_values(S: SimpleNamespace, model: Model) -> dict:
     """Triangles at t = 0, their bins, the meshes' motion (v, Omega, centre, surface velocity)."""
     tab = model.mesh_table
-    S.tri_v.from_numpy(tab.rest + tab.shift[:, None, :])
-    S.tri_mesh.from_numpy(tab.mesh_id)
-    S.tri_patch.from_numpy(tab.patch)
+    values = {"tri_v": tab.rest + tab.shift[:, None, :], "tri_mesh": tab.mesh_id, "tri_patch": tab.patch,
+              "mbin_start": tab.start, "mbin_tri": padded_bins(S, tab.tri), "mh_id": -1,
+              "mesh_motion": np.array([[m.velocity, np.asarray(m.axis) * m.speed, m.center, m.surface_velocity]
+                                       for m in model.meshes], float)}
     if model.features.moving_meshes:
-        S.tri_rest.from_numpy(tab.rest)
-        S.tri_shift.from_numpy(tab.shift)
-    load_bins(S, tab.start, tab.tri)
-    S.mesh_motion.from_numpy(np.array([[m.velocity, np.asarray(m.axis) * m.speed, m.center, m.surface_velocity]
-                                       for m in model.meshes], float))
-    S.mh_id.fill(-1)
+        values.update(tri_rest=tab.rest, tri_shift=tab.shift)
+    return values
+
+
+def padded_bins(S: SimpleNamespace, tri: np.ndarray) -> np.ndarray:
+    """The triangles' cell lists in mbin_tri's length (zeros after them)."""
+    full = np.zeros(S.mbin_tri.shape[0], np.int32)
+    full[:len(tri)] = tri
+    return full
+
+
+def fill(S: SimpleNamespace, model: Model) -> None:
+    """Every start value of the State's fields, in one launch per element type (`kernels/field_copy.py`);
+    a number fills its whole field."""
+    values = particle_values(S, model)
+    if model.features.heat:
+        values.update(heat_values(S, model))
+    values.update(surface_values(S, model))
+    write_fields({name: (getattr(S, name), value) for name, value in values.items()})
 
 
 def load_bins(S: SimpleNamespace, start: np.ndarray, tri: np.ndarray) -> None:
     """Put the triangles' cell lists (`tidem.walls.mesh_bins.bin_triangles`) into mbin_start / mbin_tri."""
     S.mbin_start.from_numpy(start)
-    full = np.zeros(S.mbin_tri.shape[0], np.int32)
-    full[:len(tri)] = tri
-    S.mbin_tri.from_numpy(full)
+    S.mbin_tri.from_numpy(padded_bins(S, tri))
