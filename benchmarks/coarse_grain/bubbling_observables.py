@@ -16,12 +16,15 @@ For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 
 - `dispersion_mm2_s`: vertical dispersion coefficient D_z = slope of <(z(t + tau) - z(t))^2> / 2 over lags
   tau of LAGS, particles followed by id (a mixing rate);
 - `alpha_W_m2K`, `tube_heat_W`: time means of the tube's alpha and heat flow, from timeseries.csv.
-Prints one Markdown row per run; `--csv` also writes them.
+Prints one Markdown row per run; `--csv` also writes them. Then, grouping runs whose labels differ only in
+a trailing `_sN` (seeds), one row per group: the mean over its seeds, their range, and the mean's deviation
+from the first group's mean.
 """
 
 from __future__ import annotations
 
 import csv
+import re
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -121,6 +124,22 @@ def observe(run: Path, t_start: float) -> dict[str, float]:
     }
 
 
+def print_groups(rows: list[dict]) -> None:
+    """Mean [range] (deviation from the first group) per group of seeds."""
+    groups: dict[str, list[dict]] = {}
+    for row in rows:
+        groups.setdefault(re.sub(r"_s\d+$", "", row["run"]), []).append(row)
+    base = {c: np.mean([r[c] for r in next(iter(groups.values()))]) for c in COLUMNS}
+    print("\n| runs | seeds | " + " | ".join(COLUMNS) + " |\n|" + "---|" * (len(COLUMNS) + 2))
+    for name, members in groups.items():
+        cells = []
+        for c in COLUMNS:
+            v = np.array([r[c] for r in members])
+            spread = f" [{v.min():.4g}, {v.max():.4g}]" if len(v) > 1 else ""
+            cells.append(f"{v.mean():.4g}{spread} ({100 * (v.mean() / base[c] - 1):+.1f} %)")
+        print(f"| {name} | {len(members)} | " + " | ".join(cells) + " |")
+
+
 def main(argv: list[str]) -> None:
     out = None
     if "--csv" in argv:
@@ -135,6 +154,7 @@ def main(argv: list[str]) -> None:
         obs = observe(Path(path), t_start)
         rows.append({"run": label or path, **obs})
         print(f"| {label or path} | " + " | ".join(f"{obs[c]:.4g}" for c in COLUMNS) + " |", flush=True)
+    print_groups(rows)
     if out is not None:
         with open(out, "w", newline="") as f:
             w = csv.DictWriter(f, ["run", *COLUMNS])

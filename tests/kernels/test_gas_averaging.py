@@ -112,7 +112,8 @@ def test_the_default_length_is_twelve_diameters_of_the_largest_grain():
     from tidem.scene.load import validate
 
     raw = packed_column(0.1)
-    raw["particles"].append({"name": "big", "material": "sand", "diameter": {"value": 0.0015}, "coarse_grain": 1.3,
+    raw["materials"]["coarse_sand"] = raw["materials"]["sand"]  # parcels: a material of their own k
+    raw["particles"].append({"name": "big", "material": "coarse_sand", "diameter": {"value": 0.0015}, "coarse_grain": 1.3,
                              "positions": [[0.004, 0.004, 0.03]]})
     assert averaging_length(validate(raw).scene) == pytest.approx(0.018, rel=1e-12)
     raw["gas"]["averaging_length"] = "cells"

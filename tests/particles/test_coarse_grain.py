@@ -67,12 +67,13 @@ def test_a_parcel_heats_in_its_grains_lumped_time(solver_for):
 
 @pytest.mark.parametrize("law", ["hertz_mindlin", "linear"])
 def test_parcels_rebound_with_their_grains_restitution(solver_for, law):
-    """Head-on impact of two equal particles at 0.5 m/s each: rebound / impact speed."""
+    """contact.parcel_restitution = "grains": a head-on impact of two equal particles at 0.5 m/s each rebounds
+    with the grains' restitution at k = 1 and 2."""
     ratios = []
     for k in (1.0, 2.0):
         d = 1e-3 * k
         raw = make_scene(
-            contact={"model": law},
+            contact={"model": law, "parcel_restitution": "grains"},
             materials={"sand": {**SAND, "restitution": 0.6}},
             particles=[{"name": "p", "material": "sand", "diameter": {"value": 1e-3}, "coarse_grain": k,
                         "positions": [[-0.51 * d, 0, 0], [0.51 * d, 0, 0]],
@@ -97,7 +98,7 @@ def test_kinetic_theory_parcels_rebound_with_the_restitution_that_keeps_their_gr
     d = 2e-3  # the parcel
     raw = make_scene(
         domain={"walls": "auto", "wall_material": "sand"},
-        contact={"model": law, "parcel_restitution": "kinetic_theory"},
+        contact={"model": law},  # parcel_restitution: "kinetic_theory", the default
         materials={"sand": {**SAND, "restitution": 0.9}},
         particles=[{"name": "p", "material": "sand", "diameter": {"value": 1e-3}, "coarse_grain": 2.0,
                     "positions": [[-0.51 * d, 0, 0], [0.51 * d, 0, 0], [0.1 - 0.51 * d, 0.05, 0]],
@@ -117,7 +118,6 @@ def test_kinetic_theory_parcel_restitution_is_refused_where_it_has_no_value():
     from tidem.scene.load import validate
 
     raw = heated_bed(coarse_grain=2.0)
-    raw["contact"] = {"parcel_restitution": "kinetic_theory"}
     raw["materials"]["sand"]["restitution"] = 0.7  # 2 (1 - 0.49) = 1.02
     with pytest.raises(SceneError) as err:
         validate(raw)
@@ -130,6 +130,8 @@ def test_kinetic_theory_parcel_restitution_is_refused_where_it_has_no_value():
     with pytest.raises(SceneError) as err:
         validate(raw)
     assert "particles[1].coarse_grain: with contact.parcel_restitution" in str(err.value)
+    raw["contact"] = {"parcel_restitution": "grains"}
+    validate(raw)  # the grains' restitution: any k, mixed
 
 
 def heated_bed(**group) -> dict:
@@ -160,7 +162,8 @@ def test_mixed_coarse_grain_with_heat_is_refused():
     from tidem.scene.load import validate
 
     raw = heated_bed(coarse_grain=2.0)
-    raw["particles"].append({**raw["particles"][0], "name": "q", "coarse_grain": 1.5,
+    raw["materials"]["coarse_sand"] = raw["materials"]["sand"]  # the parcel restitution: one k per material
+    raw["particles"].append({**raw["particles"][0], "name": "q", "material": "coarse_sand", "coarse_grain": 1.5,
                              "region": {"min": [0, 0, 0.02], "max": [0.02, 0.02, 0.03]}})
     with pytest.raises(SceneError) as err:
         validate(raw)

@@ -136,7 +136,7 @@ def parameter_tables(scene, mat_names: list[str], surfaces: list[dict]) -> tuple
 
 def parcel_ratios(scene) -> dict[str, float]:
     """{material: k of its groups} under `contact.parcel_restitution = "kinetic_theory"`; empty under
-    "grains" (every pair keeps its materials' restitution)."""
-    if scene.contact.parcel_restitution != "kinetic_theory":
+    "grains" (every pair keeps its materials' restitution) and without contacts."""
+    if scene.contact.parcel_restitution != "kinetic_theory" or scene.contact.model == "none":
         return {}
     return {g.material: g.coarse_grain for g in scene.particles}

@@ -28,8 +28,8 @@ def coarse_grain_checks(scene: Scene) -> list[str]:
 def parcel_restitution_checks(scene: Scene) -> list[str]:
     """`contact.parcel_restitution = "kinetic_theory"` sets each pair of particle materials the restitution
     e_p = sqrt(1 - k (1 - e^2)) (`tidem.particles.contact_params.kinetic_theory_restitution`): one k per
-    material, and k (1 - e^2) below 1, where e_p exists."""
-    if scene.contact.parcel_restitution != "kinetic_theory":
+    material, and k (1 - e^2) below 1, where e_p exists (nothing to check without contacts)."""
+    if scene.contact.parcel_restitution != "kinetic_theory" or scene.contact.model == "none":
         return []
     key = 'contact.parcel_restitution = "kinetic_theory"'
     k: dict[str, float] = {}

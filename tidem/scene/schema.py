@@ -261,7 +261,7 @@ class Contact(Strict):
     """The contact law between particles and with walls and tubes."""
 
     model: Literal["hertz_mindlin", "linear", "hysteretic", "none"] = "hertz_mindlin"
-    parcel_restitution: Literal["grains", "kinetic_theory"] = "grains"
+    parcel_restitution: Literal["kinetic_theory", "grains"] = "kinetic_theory"
 
 
 class Numerics(Strict):
