@@ -114,7 +114,9 @@ def test_kinetic_theory_parcels_rebound_with_the_restitution_that_keeps_their_gr
 
 
 def test_kinetic_theory_parcel_restitution_is_refused_where_it_has_no_value():
-    """k (1 - e^2) >= 1 leaves no restitution that keeps the grains' dissipation; a material's parcels need one k."""
+    """k (1 - e^2) >= 1 leaves no restitution that keeps the grains' dissipation; one under the hysteretic law's
+    floor is refused as a material's would be; a material's parcels need one k."""
+    from tidem.particles.contact_params import hysteretic_floor_errors
     from tidem.scene.load import validate
 
     raw = heated_bed(coarse_grain=2.0)
@@ -124,6 +126,11 @@ def test_kinetic_theory_parcel_restitution_is_refused_where_it_has_no_value():
     assert "k (1 - e^2) = 1.02 must stay below 1; use coarse_grain below 1.96" in str(err.value)
     raw["materials"]["sand"]["restitution"] = 0.9
     validate(raw)
+    raw["contact"] = {"model": "hysteretic"}  # e_p = 0.0245 at k = 5.26: under the law's force floor
+    raw["particles"][0]["coarse_grain"] = 5.26
+    assert "kinetic-theory restitution 0.0245, below what the hysteretic law" in hysteretic_floor_errors(validate(raw).scene)[0]
+    raw["contact"] = {}
+    raw["particles"][0]["coarse_grain"] = 2.0
     del raw["heat"]
     raw["particles"].append({**raw["particles"][0], "name": "q", "coarse_grain": 1.5,
                              "region": {"min": [0, 0, 0.02], "max": [0.02, 0.02, 0.03]}})

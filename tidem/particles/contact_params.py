@@ -102,14 +102,23 @@ def pair_vector(a, b, wall_friction=None, heat=None, coarse_grain: float = 1.0) 
 
 
 def hysteretic_floor_errors(scene) -> list[str]:
-    """Materials whose restitution the hysteretic law cannot give with its force floor."""
+    """Materials whose restitution, or whose parcels' kinetic-theory restitution, the hysteretic law cannot
+    give with its force floor."""
     if scene.contact.model != "hysteretic":
         return []
     mats = scene.materials
-    low = [n for n, m in mats.items() if m.restitution ** 2 <= FLOOR * 1.01]
-    return [f"materials.{n}.restitution: {mats[n].restitution} is below what the hysteretic law "
-            f"can give with its force floor ({math.sqrt(FLOOR * 1.01):.3f}); raise it or use "
-            "contact.model = 'linear'" for n in low]
+    least = math.sqrt(FLOOR * 1.01)
+    low = [n for n, m in mats.items() if m.restitution <= least]
+    errors = [f"materials.{n}.restitution: {mats[n].restitution} is below what the hysteretic law "
+              f"can give with its force floor ({least:.3f}); raise it or use contact.model = 'linear'" for n in low]
+    for n, k in parcel_ratios(scene).items():
+        e = mats[n].restitution
+        if n not in low and k * (1 - e * e) < 1 and kinetic_theory_restitution(e, k) <= least:
+            errors.append(f"particles[*].coarse_grain: parcels of k = {k:g} of materials.{n} would collide with the "
+                          f"kinetic-theory restitution {kinetic_theory_restitution(e, k):.3g}, below what the hysteretic "
+                          f"law can give with its force floor ({least:.3f}); lower coarse_grain, raise the restitution "
+                          "or use contact.parcel_restitution = 'grains'")
+    return errors
 
 
 def parameter_tables(scene, mat_names: list[str], surfaces: list[dict]) -> tuple[np.ndarray, np.ndarray]:
