@@ -81,7 +81,7 @@ def dispersion(times: np.ndarray, z_by_id: list[dict[int, float]]) -> float:
     dt = float(np.median(np.diff(times)))
     lags, msd = [], []
     for lag in LAGS:
-        step = int(round(lag / dt))
+        step = round(lag / dt)
         if step < 1 or step >= len(times):
             continue
         sq = []
@@ -95,7 +95,8 @@ def dispersion(times: np.ndarray, z_by_id: list[dict[int, float]]) -> float:
 
 
 def observe(run: Path, t_start: float) -> dict[str, float]:
-    rows = list(csv.DictReader(open(run / "timeseries.csv")))
+    with open(run / "timeseries.csv") as f:
+        rows = list(csv.DictReader(f))
     col = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
     t = col["time_s"]
     win = t >= t_start

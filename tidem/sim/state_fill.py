@@ -32,7 +32,7 @@ def wall_foil_vector(plane: dict, model: Model) -> list[float]:
     return [plane["flux"], plane["foil_C"], area]
 
 
-def particle_values(S: SimpleNamespace, model: Model) -> dict:
+def particle_values(model: Model) -> dict:
     """Start positions, velocities and sizes; fixed particles get zero inverse mass and inertia."""
     feat = model.features
     N = model.capacity
@@ -55,7 +55,7 @@ def particle_values(S: SimpleNamespace, model: Model) -> dict:
     return values
 
 
-def heat_values(S: SimpleNamespace, model: Model) -> dict:
+def heat_values(model: Model) -> dict:
     """Start temperatures, 1/(m c), fixed surface temperatures, foils and the tubes' side vectors."""
     feat = model.features
     T0 = model.scene.heat.initial_temperature  # a foil's own temperature is in tube_bin_T
@@ -106,9 +106,9 @@ def padded_bins(S: SimpleNamespace, tri: np.ndarray) -> np.ndarray:
 def fill(S: SimpleNamespace, model: Model) -> None:
     """Every start value of the State's fields, in one launch per element type (`kernels/field_copy.py`);
     a number fills its whole field."""
-    values = particle_values(S, model)
+    values = particle_values(model)
     if model.features.heat:
-        values.update(heat_values(S, model))
+        values.update(heat_values(model))
     values.update(surface_values(S, model))
     write_fields({name: (getattr(S, name), value) for name, value in values.items()})
 
