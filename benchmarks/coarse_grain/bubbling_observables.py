@@ -1,6 +1,6 @@
 """The observables of a developed bubbling bed, per run, over a window (issue's coarse-graining list).
 
-    python benchmarks/coarse_grain/bubbling_observables.py T_START RUN_DIR[=LABEL] ... [--csv OUT.csv]
+    python benchmarks/coarse_grain/bubbling_observables.py T_START RUN_DIR[=LABEL] ... [--csv OUT.csv] [--plot OUT.png]
 
 For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 0.02 s or so:
 `--set output.interval=0.02`), over the window from T_START to the run's end:
@@ -18,7 +18,7 @@ For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 
 - `alpha_W_m2K`, `tube_heat_W`: time means of the tube's alpha and heat flow, from timeseries.csv.
 Prints one Markdown row per run; `--csv` also writes them. Then, grouping runs whose labels differ only in
 a trailing `_sN` (seeds), one row per group: the mean over its seeds, their range, and the mean's deviation
-from the first group's mean.
+from the first group's mean; `--plot` draws those deviations as bars with the seeds' range (5 % shaded).
 """
 
 from __future__ import annotations
@@ -39,6 +39,8 @@ CELL = 0.006  # m: the slab's gas cell
 LAGS = (0.02, 0.04, 0.06, 0.08, 0.1)  # s
 COLUMNS = ("height_mm", "com_mm", "dp_std_Pa", "dp_freq_Hz", "theta_mm2_s2", "dispersion_mm2_s",
            "alpha_W_m2K", "tube_heat_W")
+SHOWN = ("bed height", "centre of mass", "Δp std", "Δp peak", "granular T", "dispersion", "tube alpha",
+         "tube heat")  # the plot's names of COLUMNS
 
 
 def solids_top(z: np.ndarray, r: np.ndarray, share: float = 0.99) -> float:
@@ -125,11 +127,44 @@ def observe(run: Path, t_start: float) -> dict[str, float]:
     }
 
 
-def print_groups(rows: list[dict]) -> None:
-    """Mean [range] (deviation from the first group) per group of seeds."""
+def seed_groups(rows: list[dict]) -> dict[str, list[dict]]:
+    """Runs grouped by their label without a trailing `_sN`, in order."""
     groups: dict[str, list[dict]] = {}
     for row in rows:
         groups.setdefault(re.sub(r"_s\d+$", "", row["run"]), []).append(row)
+    return groups
+
+
+def plot_groups(rows: list[dict], path: Path) -> None:
+    """Each group's deviation from the first group's mean per observable, bars with the seeds' range."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = seed_groups(rows)
+    names = list(groups)
+    base = {c: np.mean([r[c] for r in groups[names[0]]]) for c in COLUMNS}
+    width = 0.8 / max(len(names) - 1, 1)
+    fig, ax = plt.subplots(figsize=(11, 4.5))
+    for g, name in enumerate(names[1:]):
+        dev = np.array([[100 * (r[c] / base[c] - 1) for c in COLUMNS] for r in groups[name]])
+        mean = dev.mean(axis=0)
+        x = np.arange(len(COLUMNS)) + (g - (len(names) - 2) / 2) * width
+        ax.bar(x, mean, width, yerr=[mean - dev.min(axis=0), dev.max(axis=0) - mean], capsize=2,
+               label=f"{name} ({len(dev)} seed{'s' if len(dev) > 1 else ''})")
+    ax.axhline(0.0, color="black", lw=0.8)
+    ax.axhspan(-5, 5, color="0.9", zorder=0)
+    ax.set_xticks(np.arange(len(COLUMNS)), SHOWN)
+    ax.set_ylabel(f"deviation from {names[0]} [%]")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def print_groups(rows: list[dict]) -> None:
+    """Mean [range] (deviation from the first group) per group of seeds."""
+    groups = seed_groups(rows)
     base = {c: np.mean([r[c] for r in next(iter(groups.values()))]) for c in COLUMNS}
     print("\n| runs | seeds | " + " | ".join(COLUMNS) + " |\n|" + "---|" * (len(COLUMNS) + 2))
     for name, members in groups.items():
@@ -142,10 +177,14 @@ def print_groups(rows: list[dict]) -> None:
 
 
 def main(argv: list[str]) -> None:
-    out = None
+    out = figure = None
     if "--csv" in argv:
         i = argv.index("--csv")
         out = Path(argv[i + 1])
+        argv = argv[:i] + argv[i + 2:]
+    if "--plot" in argv:
+        i = argv.index("--plot")
+        figure = Path(argv[i + 1])
         argv = argv[:i] + argv[i + 2:]
     t_start = float(argv[0])
     print("| run | " + " | ".join(COLUMNS) + " |\n|" + "---|" * (len(COLUMNS) + 1))
@@ -156,6 +195,8 @@ def main(argv: list[str]) -> None:
         rows.append({"run": label or path, **obs})
         print(f"| {label or path} | " + " | ".join(f"{obs[c]:.4g}" for c in COLUMNS) + " |", flush=True)
     print_groups(rows)
+    if figure is not None:
+        plot_groups(rows, figure)
     if out is not None:
         with open(out, "w", newline="") as f:
             w = csv.DictWriter(f, ["run", *COLUMNS])
