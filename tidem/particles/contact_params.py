@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from tidem.kernels import contact_laws as cl
+from tidem.scene.sizes import parcel_ratios
 
 FLOOR = 0.001  # repulsive floor of the hysteretic law, F >= FLOOR k_l delta (source 3)
 
@@ -141,11 +142,3 @@ def parameter_tables(scene, mat_names: list[str], surfaces: list[dict]) -> tuple
             surf[a, s] = pair_vector(mats[na], mats[sd["material"]], sd["friction"], scene.heat)
             surf[a, s, cl.E_J] = 0.0  # a wall is a body of infinite size for the linear laws
     return pair, surf
-
-
-def parcel_ratios(scene) -> dict[str, float]:
-    """{material: k of its groups} under `contact.parcel_restitution = "kinetic_theory"`; empty under
-    "grains" (every pair keeps its materials' restitution) and without contacts."""
-    if scene.contact.parcel_restitution != "kinetic_theory" or scene.contact.model == "none":
-        return {}
-    return {g.material: g.coarse_grain for g in scene.particles}

@@ -8,9 +8,9 @@ import math
 from tidem.gas.geometry import averaging_length, convection_walls, gas_grid, voidage_layers
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_smoothing import plan_filter
-from tidem.particles.contact_params import kinetic_theory_restitution, parcel_ratios
+from tidem.particles.contact_params import kinetic_theory_restitution
 from tidem.runner.output_size import cadence
-from tidem.scene.sizes import AVERAGING_GRAINS
+from tidem.scene.sizes import AVERAGING_GRAINS, parcel_ratios
 
 LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
 

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from itertools import combinations_with_replacement
+
 from tidem.scene.heat_checks import heat_checks
 from tidem.scene.schedule import is_scheduled
 from tidem.scene.schema import Scene
-from tidem.scene.sizes import AVERAGING_GRAINS, largest_diameter, largest_grain, max_diameter
+from tidem.scene.sizes import AVERAGING_GRAINS, largest_diameter, largest_grain, max_diameter, parcel_ratios
 
 AXES = "xyz"
 
@@ -29,31 +31,26 @@ def parcel_restitution_checks(scene: Scene) -> list[str]:
     """`contact.parcel_restitution = "kinetic_theory"` sets each pair of particle materials the restitution
     e_p = sqrt(1 - k (1 - e^2)) (`tidem.particles.contact_params.kinetic_theory_restitution`): one k per
     material, and k (1 - e^2) below 1, where e_p exists (nothing to check without contacts)."""
-    if scene.contact.parcel_restitution != "kinetic_theory" or scene.contact.model == "none":
+    k = parcel_ratios(scene)
+    if not k:
         return []
     key = 'contact.parcel_restitution = "kinetic_theory"'
-    k: dict[str, float] = {}
-    errors = []
-    for i, g in enumerate(scene.particles):
-        if g.material not in scene.materials:  # named by cross_checks
-            continue
-        if k.setdefault(g.material, g.coarse_grain) != g.coarse_grain:
-            errors.append(f"particles[{i}].coarse_grain: with {key} the parcels of one material need one k "
-                          f"(materials.{g.material} has k = {k[g.material]:g} and {g.coarse_grain:g}); "
-                          "give the groups one coarse_grain or each its own material")
+    errors = [f"particles[{i}].coarse_grain: with {key} the parcels of one material need one k "
+              f"(materials.{g.material} has k = {k[g.material]:g} and {g.coarse_grain:g}); "
+              "give the groups one coarse_grain or each its own material"
+              for i, g in enumerate(scene.particles) if g.material in k and g.coarse_grain != k[g.material]]
     if errors:
         return errors
     mats = scene.materials
-    for a in sorted(k):
-        for b in sorted(k):
-            e = 0.5 * (mats[a].restitution + mats[b].restitution)
-            k_pair = 0.5 * (k[a] + k[b])
-            if a <= b and k_pair * (1 - e * e) >= 1.0:
-                named = f"materials.{a}" if a == b else f"materials.{a} with materials.{b}"
-                errors.append(f"particles[*].coarse_grain: with {key} parcels of k = {k_pair:g} and restitution "
-                              f"{e:g} ({named}) have no restitution that dissipates what their "
-                              f"grains do: k (1 - e^2) = {k_pair * (1 - e * e):.3g} must stay below 1; use "
-                              f"coarse_grain below {1 / (1 - e * e):.3g} or contact.parcel_restitution = \"grains\"")
+    for a, b in combinations_with_replacement(sorted(k), 2):
+        e = 0.5 * (mats[a].restitution + mats[b].restitution)
+        k_pair = 0.5 * (k[a] + k[b])
+        if k_pair * (1 - e * e) >= 1.0:
+            named = f"materials.{a}" if a == b else f"materials.{a} with materials.{b}"
+            errors.append(f"particles[*].coarse_grain: with {key} parcels of k = {k_pair:g} and restitution "
+                          f"{e:g} ({named}) have no restitution that dissipates what their "
+                          f"grains do: k (1 - e^2) = {k_pair * (1 - e * e):.3g} must stay below 1; use "
+                          f"coarse_grain below {1 / (1 - e * e):.3g} or contact.parcel_restitution = \"grains\"")
     return errors
 
 

@@ -33,6 +33,19 @@ def parcel_count(group) -> int | None:
     return max(1, round(group.count / group.coarse_grain**3))
 
 
+def parcel_ratios(scene: Scene) -> dict[str, float]:
+    """{particle material: k of its groups} where parcels collide with the kinetic-theory restitution
+    (`contact.parcel_restitution = "kinetic_theory"`, `tidem.particles.contact_params`; one k per material,
+    `tidem.scene.checks.parcel_restitution_checks`); empty under "grains" and without contacts."""
+    if scene.contact.parcel_restitution != "kinetic_theory" or scene.contact.model == "none":
+        return {}
+    ratios: dict[str, float] = {}
+    for g in scene.particles:
+        if g.material in scene.materials:  # an unknown one is named by the cross checks
+            ratios.setdefault(g.material, g.coarse_grain)  # the first group's k; the checks name the others
+    return ratios
+
+
 AVERAGING_GRAINS = 12.0  # the default averaging length in grain diameters (docs/design/averaging_length.md, section 4)
 
 
