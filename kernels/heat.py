@@ -74,14 +74,28 @@ def spot_conductance(p, r_eff, delta):
 
 
 @ti.func
+def wall_spot_conductance(p, r, delta, k):
+    """The solid contact spots of a parcel of k^3 grains (radius r = k r_g) on a wall: the k^2 grains
+    that cover its wall area, each at the parcel's relative overlap, k^2 2 k_s a_g = k 2 k_s a [W/K]."""
+    return k * spot_conductance(p, r, delta)
+
+
+@ti.func
+def wall_gap_conductance(p, r, k):
+    """Schluender's gas-gap coefficient over a touching particle's share of the wall, alpha_WP(d/k) pi r^2
+    [W/K] (the grains' diameter d/k for a parcel of k^3 grains)."""
+    d = 2.0 * r / k
+    x = 2.0 * p[GAP] / d
+    alpha = 4.0 * p[LAMBDA_GAS] / d * ((1.0 + x) * ti.log(1.0 + 1.0 / x) - 1.0)
+    return alpha * 3.141592653589793 * r * r
+
+
+@ti.func
 def wall_conductance(p, r, delta, k):
     """Contact spot plus Schluender's gas-gap coefficient over pi d^2 / 4 [W/K]; for a parcel of
     k^3 grains (radius r = k r_g) the k^2 grains that cover its wall area, each at the
     parcel's relative overlap: k^2 H_wall(r/k, delta/k) = k 2 k_s a + alpha_WP(d/k) pi r^2."""
-    d = 2.0 * r / k
-    x = 2.0 * p[GAP] / d
-    alpha = 4.0 * p[LAMBDA_GAS] / d * ((1.0 + x) * ti.log(1.0 + 1.0 / x) - 1.0)
-    return k * spot_conductance(p, r, delta) + alpha * 3.141592653589793 * r * r
+    return wall_spot_conductance(p, r, delta, k) + wall_gap_conductance(p, r, k)
 
 
 @ti.func

@@ -111,6 +111,9 @@ def make_integrators(grid, S, heat: bool = False, n_surf: int = 0, angle_bins: i
                 ti.loop_config(serialize=True)
                 for k, b in ti.ndrange(*S.tube_bin_rate.shape):
                     S.tube_bin_energy[k, b] += booked * S.tube_bin_rate[k, b]
+                ti.loop_config(serialize=True)
+                for k, r in ti.ndrange(*S.tube_route_rate.shape):
+                    S.tube_route_energy[k, r] += booked * S.tube_route_rate[k, r]
         if ti.static(foil):
             ti.loop_config(serialize=True)
             for k, b in ti.ndrange(*S.tube_bin_T.shape):

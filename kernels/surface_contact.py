@@ -14,7 +14,8 @@ static surfaces that were out of reach at the last neighbour build (`mark_near`)
 With heat, a surface with a temperature conducts to a touching particle by the wall contact laws
 (`kernels/heat.py`, Schluender's gas gap, radiation), and to one within the gas lens that does not
 touch it by the lens; the heat flow is booked per surface in surf_rate and, around a tube, per angle
-bin of the contact point (omega = atan2(side, up), 0 = top, 180 deg = bottom) in tube_bin_rate; a
+bin of the contact point (omega = atan2(side, up), 0 = top, 180 deg = bottom) in tube_bin_rate, and the
+shares of a tube's flow through the solid contact spots and through the gas lens in tube_route_rate; a
 heated foil's own temperature (per angle bin of a tube, one per wall) takes the place of a fixed one.
 With `blocks` (the CPU's slab passes, `kernels/contact.py`) each block of slabs books its particles'
 flows in rows of its own (surf_rate_block, tube_bin_block: one thread a block, each in the block's
@@ -29,7 +30,7 @@ from types import SimpleNamespace
 import taichi as ti
 
 from .contact_laws import make_slot_response
-from .heat import pfp_conductance, wall_conductance, wall_radiation
+from .heat import pfp_conductance, wall_gap_conductance, wall_radiation, wall_spot_conductance
 
 
 def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, respond, hysteretic: bool, rolling: bool,
@@ -152,6 +153,16 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 ti.atomic_add(S.tube_bin_rate[s - n_planes, b], flow)
 
     @ti.func
+    def route_heat(s: ti.template(), route: ti.template(), flow, blk):
+        """Book the share of a particle's heat flow from tube s that went by `route` (0 the solid contact
+        spot, 1 the gas lens of a particle that does not touch), as `surface_heat` books the whole."""
+        if ti.static(angle_bins > 0 and s >= n_planes):
+            if ti.static(blocks):
+                S.tube_route_block[blk, (s - n_planes) * 2 + route] += flow
+            else:
+                ti.atomic_add(S.tube_route_rate[s - n_planes, route], flow)
+
+    @ti.func
     def clear_flows():
         """Zero the surfaces' heat flows before a pass that conducts (serial: a few hundred items at most):
         with `blocks` the blocks' rows, the meshes' columns (`kernels/mesh_contact.py`) included, which
@@ -164,6 +175,9 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 ti.loop_config(serialize=True)
                 for blk, kb in ti.ndrange(blocks, n_tubes * angle_bins):
                     S.tube_bin_block[blk, kb] = 0.0
+                ti.loop_config(serialize=True)
+                for blk, kr in ti.ndrange(blocks, n_tubes * 2):
+                    S.tube_route_block[blk, kr] = 0.0
         elif ti.static(heat):
             ti.loop_config(serialize=True)
             for s in range(S.surf_rate.shape[0]):
@@ -172,6 +186,9 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                 ti.loop_config(serialize=True)
                 for k, b in ti.ndrange(n_tubes, angle_bins):
                     S.tube_bin_rate[k, b] = 0.0
+                ti.loop_config(serialize=True)
+                for k, r in ti.ndrange(n_tubes, 2):
+                    S.tube_route_rate[k, r] = 0.0
 
     @ti.func
     def sum_blocks():
@@ -190,6 +207,12 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                     for blk in range(blocks):
                         total += S.tube_bin_block[blk, k * angle_bins + b]
                     S.tube_bin_rate[k, b] = total
+                ti.loop_config(serialize=True)
+                for k, r in ti.ndrange(n_tubes, 2):
+                    total = 0.0
+                    for blk in range(blocks):
+                        total += S.tube_route_block[blk, k * 2 + r]
+                    S.tube_route_rate[k, r] = total
 
     @ti.func
     def visit(i, xi, vi, wi, ri, mi, mat_i, t, dt, conduct, diag, force, torque, heat_in, worst, touching, blk):
@@ -229,11 +252,13 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                             if conduct and S.surf_T[s] > 0.0:
                                 b = tube_bin(s, nrm)
                                 t_wall = wall_temperature(s, b)
-                                flow = wall_conductance(surface_params(mat_i, s), ri, delta, cg) * (t_wall - S.T[i])
+                                spot = wall_spot_conductance(surface_params(mat_i, s), ri, delta, cg)
+                                flow = (spot + wall_gap_conductance(surface_params(mat_i, s), ri, cg)) * (t_wall - S.T[i])
                                 if ti.static(radiation):
                                     flow += wall_radiation(surface_params(mat_i, s), ri, t_wall, S.T[i])
                                 heat_in += flow
                                 surface_heat(s, b, flow, blk)
+                                route_heat(s, 0, spot * (t_wall - S.T[i]), blk)
                         if diag:
                             worst = ti.max(worst, delta / ri)
                             touching += 1
@@ -248,6 +273,7 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                                 wall_temperature(s, b) - S.T[i])
                             heat_in += flow
                             surface_heat(s, b, flow, blk)
+                            route_heat(s, 1, flow, blk)
         S.wmask[i] = held
         return force, torque, heat_in, worst, touching
 

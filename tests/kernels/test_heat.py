@@ -238,3 +238,33 @@ def test_tube_heat_lands_in_the_angle_bin_of_the_contact(solver_for):
     area = 2 * math.pi * r_t * 0.02
     flow = s.heat_summary()["tubes0_heat_W"]
     assert means[0]["mean_alpha_W_m2K"] == pytest.approx(flow / area / 100.0, rel=1e-3)
+
+
+def test_a_tubes_alpha_splits_into_contact_spot_gas_gap_and_gas_lens(solver_for):
+    """Two fixed particles by a hot tube, one touching it (overlap 1e-5 m), one 0.1 mm off it: the tube's
+    mean alpha splits into the touching one's contact spot 2 k sqrt(R delta) and Schluender gap
+    alpha_WP pi R^2 (source 3 eq. 20) and the other one's gas lens (Rong & Horio), each to 1e-6."""
+    from tidem.results.tables import alpha_profile
+
+    r_t, overlap, gap = 0.01, 1e-5, 1e-4
+    on, off = r_t + R - overlap, r_t + R + gap
+    raw = make_scene(
+        domain={"min": [-0.05, 0.0, -0.05], "max": [0.05, 0.02, 0.05], "walls": "none", "gravity": [0, 0, 0]},
+        materials={"steel": STEEL},
+        tubes=[{"center": [0.0, 0.0, 0.0], "axis": "y", "diameter": 2 * r_t, "temperature": 400.0}],
+        particles=[{"name": "p", "material": "steel", "diameter": {"distribution": "mono", "value": 2 * R},
+                    "positions": [[0.0, 0.01, on], [0.0, 0.01, -off]], "temperature": 300.0, "fixed": True}],
+        heat={"initial_temperature": 300.0, "angle_bins": 8, "gas_conductivity": 0.03, "gas_mean_free_path": 7e-8,
+              "roughness": 2e-6},
+        numerics={"dt": 1e-6, "force_dt": True},
+    )
+    s = solver_for(raw)
+    for _ in range(10):
+        s.step()
+    _rows, means = alpha_profile(s.model, s)
+    area = 2 * math.pi * r_t * 0.02  # conductance [W/K] per alpha [W/(m^2 K)]
+    split = {key: means[0][f"{key}_alpha_W_m2K"] * area for key in ("contact_spot", "gas_gap", "gas_lens")}
+    assert split["contact_spot"] == pytest.approx(2 * 16.0 * math.sqrt(R * overlap), rel=1e-6)
+    assert split["gas_gap"] == pytest.approx(schluender_alpha_wp(0.03, 2 * R, 2.07e-6) * math.pi * R**2, rel=1e-6)
+    assert split["gas_lens"] == pytest.approx(pfp_conductance_np(0.03, R, gap, 2.07e-6, 0.4 * R), rel=1e-6)
+    assert sum(split.values()) == pytest.approx(means[0]["mean_alpha_W_m2K"] * area, rel=1e-12)

@@ -136,11 +136,14 @@ def tube_mean_alpha(rec: RunRecord) -> dict[str, float]:
     heat delivered since heat.profile_start / (time x tube area x (T_tube - heat.initial_temperature)),
     source 3 eq. 34-36 averaged over the whole circumference; for a heated foil the mean of the
     local q_el / (T_foil - T_ref), with `tube1_alpha_of_mean_excess_W_m2K` and
-    `tube1_foil_storage_pct` beside it (`alpha_profile`)."""
+    `tube1_foil_storage_pct` beside it; a fixed-temperature tube's split by route beside it
+    (`tube1_contact_spot_alpha_W_m2K`, `_gas_gap_`, `_gas_lens_`, and with gas convection `_particles_`
+    and `_gas_alpha_W_m2K`; `alpha_profile`)."""
     out = {}
     for row in rec.alpha_means:
         out[f"tube{row['tube']}_mean_alpha_W_m2K"] = row["mean_alpha_W_m2K"]
-        for key in ("alpha_of_mean_excess_W_m2K", "foil_storage_pct"):  # heated foils
+        for key in ("particles_alpha_W_m2K", "contact_spot_alpha_W_m2K", "gas_gap_alpha_W_m2K", "gas_lens_alpha_W_m2K",
+                    "gas_alpha_W_m2K", "alpha_of_mean_excess_W_m2K", "foil_storage_pct"):  # by route; heated foils
             if key in row:
                 out[f"tube{row['tube']}_{key}"] = row[key]
     return out

@@ -109,12 +109,16 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
       `alpha_of_mean_excess` = q_el / (mean of T_foil - T_ref) gives the tube's heat from its
       mean temperature, and `foil_storage_pct` is the share of the heating still warming the
       foil (0 in a steady state).
+    A fixed-temperature tube's mean alpha is split by route: the solid contact spots of touching
+    particles (contact_spot_alpha), Schluender's gas gap of touching particles with their radiation
+    (gas_gap_alpha), the gas lens of particles near the tube that do not touch it (gas_lens_alpha).
     With gas-tube convection the mean alpha adds the tube's heat to the gas (gas_alpha) to
     the particles'. Returns (rows of tube, angle_deg, alpha, and the mean alpha per tube)."""
     if not model.angle_bins or solver.profile_t0 is None or solver.t <= solver.profile_t0:
         return [], []
     S = solver.state
     energy = S.tube_bin_energy.to_numpy()
+    route = S.tube_route_energy.to_numpy()
     foil_T = S.tube_bin_Tsum.to_numpy() if model.features.foil else None
     gas_energy = solver.gas.G.wall_energy.to_numpy() if solver.gas is not None and solver.gas.walls else None
     span = solver.t - solver.profile_t0
@@ -134,8 +138,11 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
         else:
             dT = tube["T"] - t_ref
             local = energy[k] / span / area / dT
-            mean = {"tube": k, "mean_alpha_W_m2K": float(energy[k].sum() / span / (area * bins) / dT),
-                    "averaged_over_s": span}
+            scale = span * area * bins * dT
+            mean = {"tube": k, "mean_alpha_W_m2K": float(energy[k].sum() / scale), "averaged_over_s": span}
+            spot, lens = (float(e / scale) for e in route[k])
+            mean.update(contact_spot_alpha_W_m2K=spot, gas_gap_alpha_W_m2K=mean["mean_alpha_W_m2K"] - spot - lens,
+                        gas_lens_alpha_W_m2K=lens)
             if gas_energy is not None:  # convection to the gas joins the particles' share
                 mean["particles_alpha_W_m2K"] = mean["mean_alpha_W_m2K"]
                 mean["gas_alpha_W_m2K"] = float(gas_energy[k] / span / (area * bins) / dT)

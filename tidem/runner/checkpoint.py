@@ -41,7 +41,7 @@ RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtim
 TRANSIENT = ("conduct", "gas_book", "rbook", "src", "nbr_new", "nbr_count", "slab_fill", "slab_next", "flips", "flip_ft", "flip_mr", "flip_dmax",
              "cell_count", "cell_start", "cell_fill", "cell_block", "sort_tail", "pcell", "sorted_idx", "sums", "worst", "worst_at",
              "nbr_touch", "nbr_end",
-             "nbr_gap", "band", "band_y", "surf_rate_block", "tube_bin_block", "mesh_pose", "plane_shift", "plane_u")
+             "nbr_gap", "band", "band_y", "surf_rate_block", "tube_bin_block", "tube_route_block", "mesh_pose", "plane_shift", "plane_u")
 
 
 class CheckpointError(RuntimeError):

@@ -262,6 +262,7 @@ class Solver(TallyReads):
             t = lap("checks", t)
         if self.model.angle_bins and self.profile_t0 is None and self.t >= self.model.scene.heat.profile_start:
             self.state.tube_bin_energy.fill(0.0)
+            self.state.tube_route_energy.fill(0.0)
             if self.model.features.foil:
                 self.state.tube_bin_Tsum.fill(0.0)
             if self.gas is not None and self.gas.walls:

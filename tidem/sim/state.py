@@ -34,7 +34,9 @@ With heat: T [K], q (heat rate into the particle [W]), inv_heat_cap (1/(m c) [K/
 surface (planes then tubes) surf_T (fixed temperature, -1 = adiabatic), surf_rate (heat flow
 into the bed [W]) and surf_energy (its time integral [J]), surf_rate_block [BLOCKS, surfaces] (each
 block of slabs' share of surf_rate on the CPU); with angle bins around heated tubes tube_bin_rate /
-tube_bin_energy (the same by angle bin), tube_bin_block (each block's share, [BLOCKS, tube x bins + bin])
+tube_bin_energy (the same by angle bin), tube_bin_block (each block's share, [BLOCKS, tube x bins + bin]),
+tube_route_rate / tube_route_energy / tube_route_block (the shares of each tube's flow through the solid
+contact spots and through the gas lens of particles that do not touch it: [tube, route], route 0 and 1)
 and tube_side (the horizontal unit vector across each tube); with heated-foil tubes tube_foil
 (heating per area [W/m^2], foil heat capacity per area [J/(m^2 K)], bin area [m^2], G / ds^2
 [W/(m^2 K)]; zeros for other tubes), tube_bin_T (foil temperature by angle bin [K]), tube_bin_dT (its change in the step)
@@ -246,6 +248,9 @@ def _place_heat_fields(p: _Placer, model: Model) -> None:
         p.place((n_tubes, bins), "tube_bin_rate")
         p.place((BLOCKS, n_tubes * bins), "tube_bin_block")  # [block, tube * bins + bin]
         p.place((n_tubes, bins), "tube_bin_energy", ti.f64)
+        p.place((n_tubes, 2), "tube_route_rate")  # through the contact spots, through the gas lens
+        p.place((BLOCKS, n_tubes * 2), "tube_route_block")  # [block, tube * 2 + route]
+        p.place((n_tubes, 2), "tube_route_energy", ti.f64)
         p.place((n_tubes,), "tube_side", n=3)
     if feat.wall_foil:
         p.place((len(model.planes),), "plane_foil", n=3)
