@@ -166,7 +166,8 @@ def test_check_prints_derived_numbers():
                                   "moving_bed_ta2.toml", "fluidized_tube.toml", "char_combustion.toml",
                                   "olefin_polymerization.toml", "plasma_sublimation.toml", "packed_bed_preheat.toml",
                                   "moving_bed_foil.toml", "lab_fluidized_bundle.toml", "hopper_discharge.toml",
-                                  "rotary_kiln.toml", "moving_bed_hopper.toml", "pseudo2d_bubbling_bed.toml"])
+                                  "rotary_kiln.toml", "moving_bed_hopper.toml", "pseudo2d_bubbling_bed.toml",
+                                  "tube_bank.toml"])
 def test_shipped_scene_smoke(tmp_path, name):
     """`tidem scene NAME --smoke` runs output.smoke_steps steps and finishes cleanly."""
     out = tmp_path / name
