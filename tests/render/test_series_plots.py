@@ -43,3 +43,11 @@ def test_running_mean_and_labels():
     assert got[7] == 1.0 and got[9] == 1.0, "NaNs are skipped, the ends take fewer samples"
     assert _label("tubes0_alpha_W_m2K") == "tubes0 alpha [W/(m$^2$ K)]"
     assert _label("discharged_mass_kg") == "discharged mass [kg]" and _label("gas_pressure_drop_Pa") == "Pressure drop [Pa]"
+
+
+def test_a_folder_without_a_time_series_gets_no_plots_and_no_error(tmp_path):
+    """`tidem render` on a folder of snapshots alone (no timeseries.csv) draws the frames and no plots."""
+    from tidem.render.plots import plot_timeseries
+
+    assert plot_timeseries(tmp_path) == []
+    assert not (tmp_path / "plots").exists()

@@ -34,7 +34,8 @@ def plot_timeseries(run_dir: Path) -> list[Path]:
 
     from tidem.render.series_plots import plot_series
 
-    data = read_series(Path(run_dir) / "timeseries.csv")
+    series = Path(run_dir) / "timeseries.csv"
+    data = read_series(series) if series.exists() else {}  # a folder of snapshots alone: frames, no plots
     if len(data.get("time_s", [])) < 2:
         return []
     out_dir = Path(run_dir) / "plots"
