@@ -145,7 +145,7 @@ def alpha_profile(model, solver) -> tuple[list[dict], list[dict]]:
                         gas_lens_alpha_W_m2K=lens)
             if gas_energy is not None:  # convection to the gas joins the particles' share
                 mean["particles_alpha_W_m2K"] = mean["mean_alpha_W_m2K"]
-                mean["gas_alpha_W_m2K"] = float(gas_energy[k] / span / (area * bins) / dT)
+                mean["gas_alpha_W_m2K"] = float(gas_energy[k] / scale)
                 mean["mean_alpha_W_m2K"] += mean["gas_alpha_W_m2K"]
         rows += [{"tube": k, "angle_deg": (b + 0.5) * 360.0 / bins, "alpha_W_m2K": float(local[b])}
                  for b in range(bins)]
