@@ -252,10 +252,11 @@ def make_surface_contacts(S, planes: list[dict], tubes: list[dict], W: int, resp
                             if conduct and S.surf_T[s] > 0.0:
                                 b = tube_bin(s, nrm)
                                 t_wall = wall_temperature(s, b)
-                                spot = wall_spot_conductance(surface_params(mat_i, s), ri, delta, cg)
-                                flow = (spot + wall_gap_conductance(surface_params(mat_i, s), ri, cg)) * (t_wall - S.T[i])
+                                params = surface_params(mat_i, s)
+                                spot = wall_spot_conductance(params, ri, delta, cg)
+                                flow = (spot + wall_gap_conductance(params, ri, cg)) * (t_wall - S.T[i])
                                 if ti.static(radiation):
-                                    flow += wall_radiation(surface_params(mat_i, s), ri, t_wall, S.T[i])
+                                    flow += wall_radiation(params, ri, t_wall, S.T[i])
                                 heat_in += flow
                                 surface_heat(s, b, flow, blk)
                                 route_heat(s, 0, spot * (t_wall - S.T[i]), blk)
