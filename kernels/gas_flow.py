@@ -19,7 +19,8 @@ deposited drag coefficients of `gas_coupling`, per cell volume V):
       CPU solve it directly instead (banded Cholesky, `kernels/gas_band.py`).
 Boundaries: inlet faces at the bottom carry a set superficial velocity (eps_f u_f = U_in);
 the top is a pressure outlet (p = 0 on the face); other box sides and faces of solid cells
-(cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient);
+(cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient), free-slip
+or, with `no_slip`, holding the gas still on the side walls (ghost value -u in the viscous term);
 periodic axes wrap.
 Cut faces (meshes in the gas, `tidem.gas.apertures`): a face open over the share a_f of its area
 carries the flux a_f eps_f u_f, u_f the gas velocity in its open part, and a cell whose gas part
@@ -65,7 +66,8 @@ def cg_batch() -> int:
 def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False, rho_c: float = 1.0,
                       tube_walls: bool = False, k_gas: float = 0.026, prandtl: float = 0.7, sources: bool = False,
                       conduction: bool = False, wall_grain: float = 0.0,
-                      wall_umf: float = 0.0, band: int = 0, open_faces: bool = False, cut_faces: bool = False):
+                      wall_umf: float = 0.0, band: int = 0, open_faces: bool = False, cut_faces: bool = False,
+                      no_slip: bool = False):
     """Return a dict of kernels for gas grid `gg` and fields `G` (see `tidem.gas.fields`); `tube_walls`
     adds convection from heated tubes (fields wall_A, wall_T, wall_D, wall_k, wall_rate, wall_energy;
     with `wall_grain` > 0, the grains' diameter, the packed-bed term in the particle-filled share, its
@@ -75,7 +77,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     pressure solve band_solve (fields band, band_y). With `open_faces` (tubes or meshes in the gas) a face's drag
     B_f, Bv_f acts over its open volume, G.open_face[c] times the face's volume (`tidem.gas.open_volume`). With
     `cut_faces` (meshes in the gas) each face carries its aperture G.aperture[c] and each cell its gas part's
-    share G.part of its volume (`tidem.gas.apertures`): the fluxes a_f S_f (eps u)_f and the volume f V."""
+    share G.part of its volume (`tidem.gas.apertures`): the fluxes a_f S_f (eps u)_f and the volume f V.
+    `no_slip`: the box's side walls (x, y; not periodic) hold the gas still (module docstring)."""
     cic, corner, weight, corners = make_cic(gg)
     n = gg.cells
     small = serial_solve(n[0] * n[1] * n[2])
@@ -84,6 +87,7 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     faces = [gg.face_shape(c) for c in range(3)]
     batch = cg_batch()
     per = gg.periodic
+    still = tuple(no_slip and a < 2 and not per[a] for a in range(3))  # side walls that hold the gas still
     h = ti.Vector(list(gg.h))
     lo = ti.Vector(list(gg.lo))
     nu = mu / rho
@@ -170,7 +174,10 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                     lap = 0.0
                     for a in ti.static(range(3)):
                         e = unit(a)
-                        lap += (U[c][face_index(I + e, c)] - 2.0 * U[c][I] + U[c][face_index(I - e, c)]) / (h[a] * h[a])
+                        up, down = U[c][face_index(I + e, c)], U[c][face_index(I - e, c)]
+                        if ti.static(still[a] and a != c):  # the mirror value beyond a wall holding the gas still
+                            up, down = ti.select(I[a] == n[a] - 1, -U[c][I], up), ti.select(I[a] == 0, -U[c][I], down)
+                        lap += (up - 2.0 * U[c][I] + down) / (h[a] * h[a])
                     inv_vol = 1.0 / vol
                     if ti.static(open_faces):
                         inv_vol /= G.open_face[c][I]

@@ -11,7 +11,9 @@ peak-to-peak range of the relative pressure (the probe's pressure 45 mm above th
 less its time mean), and the voidage of the probe's cell layer (from the gas snapshots; reported,
 not judged: the records' voidage comes from light intensity). Prints a Markdown table and draws
 FIGURE: bed height and relative pressure over windows as long as the records, and the pressure
-spectra. T_STOP=SECONDS (environment) ends every run's window there.
+spectra. T_STOP=SECONDS (environment) ends every run's window there. PROBE=COLUMN (environment)
+reads another probe's column, e.g. PROBE=gas_pressure_x45_y4_z45mm_Pa for the point at the column's
+centre (the shipped scene records both; the default is the cross-section's mean, gas_pressure_z45mm_Pa).
 """
 
 import os
@@ -27,6 +29,7 @@ from analyze import DT, find_peaks, gauss_smooth, load, resample  # noqa: E402
 T_START = 1.0  # s: the air is fully on at 0.3 s; the first slug and the bed's expansion are over by 1 s
 T_STOP = float(os.environ.get("T_STOP", "inf"))  # s: T_STOP=3.5 compares runs over one window
 PROBE_Z = 0.045
+PROBE = os.environ.get("PROBE", "gas_pressure_z45mm_Pa")  # the time-series column of the pressure probe
 SIGMA_S, PROMINENCE, MIN_SEP = 0.02, 0.15, 0.2
 
 
@@ -78,7 +81,7 @@ def read_run(run: Path):
 
     s = read_series(run / "timeseries.csv")
     keep = (s["time_s"] >= T_START) & (s["time_s"] <= T_STOP)
-    return s["time_s"][keep], s["bed_height_m"][keep], s["gas_pressure_z45mm_Pa"][keep]
+    return s["time_s"][keep], s["bed_height_m"][keep], s[PROBE][keep]
 
 
 def main(figure: str, runs: list[str]) -> None:

@@ -79,7 +79,7 @@ def test_pressure_probes_read_the_layer_means_and_the_ergun_gradient(solver_for)
     """gas.pressure_probes: a probe on a layer's centre reads that layer's mean pressure, one between
     two centres their linear interpolation, and two probes in the packed bed differ by Ergun's
     gradient (plus the gas weight) over their distance; a height outside the domain is refused."""
-    from tidem.gas.phase import probe_column
+    from tidem.gas.probes import probe_column
 
     u = 0.3
     s = solver_for(packed_column(u, pressure_probes=[0.006, 0.007, 0.018]))
@@ -93,7 +93,7 @@ def test_pressure_probes_read_the_layer_means_and_the_ergun_gradient(solver_for)
     assert probes[probe_column(0.007)] == pytest.approx(0.75 * p[1] + 0.25 * p[2], rel=1e-12)
     drop = probes[probe_column(0.006)] - probes[probe_column(0.018)]
     assert drop / 0.012 == pytest.approx(ergun_gradient(eps[1:5].mean(), u) + RHO_G * 9.81, rel=0.05)
-    with pytest.raises(SceneError, match=r"gas.pressure_probes\[1\]: height 0.05 m lies outside"):
+    with pytest.raises(SceneError, match=r"gas.pressure_probes\[1\]: z = 0.05 m lies outside"):
         solver_for(packed_column(u, pressure_probes=[0.01, 0.05]))
 
 

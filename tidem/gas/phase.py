@@ -24,6 +24,7 @@ from tidem.gas.geometry import (averaging_length, convection_walls, gas_grid, ga
                                 voidage_filters, voidage_layers)
 from tidem.gas.limits import MAX_COURANT, inlet_velocities
 from tidem.gas.open_volume import open_volumes
+from tidem.gas.probes import probe_pressures
 from tidem.gas.species import M_O2, o2_mass_fraction
 from tidem.kernels.drag import DRAG_IDS, NUSSELT_IDS
 from tidem.kernels.field_copy import FieldCopier
@@ -34,11 +35,6 @@ from tidem.kernels.gas_grid import CLOSED, INLET
 from tidem.kernels.species import make_species_kernel
 from tidem.runtime.phases import PhaseTimer, clock
 from tidem.scene.schedule import is_scheduled, start, value_at
-
-
-def probe_column(z: float) -> str:
-    """The time-series column of a pressure probe at height z [m], e.g. gas_pressure_z45mm_Pa."""
-    return f"gas_pressure_z{1000 * z:g}mm_Pa"
 
 
 class GasError(RuntimeError):
@@ -105,7 +101,7 @@ class GasPhase:
                                       gas.density * gas.heat_capacity, self.walls, k_gas,
                                       gas.heat_capacity * gas.viscosity / k_gas, self.sources,
                                       self.heat and gas.conduction, wall_grain, wall_umf, self.band,
-                                      self.open is not None, self.cut is not None)
+                                      self.open is not None, self.cut is not None, gas.side_walls == "no_slip")
         self.serial_solve = serial_solve(self.solid.size)  # as make_flow_kernels decided
         self.cg_batch = cg_batch()
         self._deposit, self._couple, self._sample, self.add_forces, self.force = make_coupling_kernels(
@@ -290,17 +286,11 @@ class GasPhase:
         return float(face[open_].mean())
 
     def probe_pressures(self, host: dict) -> dict[str, float]:
-        """{probe_column(z): pressure [Pa]} of each height z in gas.pressure_probes: the mean over the
-        fluid cells of a horizontal layer, interpolated linearly between the two layers whose centres
-        bracket z (the lowest or highest layer beyond them); gauge, p = 0 at the outlet (`host`: `host_fields()`)."""
+        """The pressures of gas.pressure_probes (`tidem.gas.probes`); gauge, p = 0 at the outlet
+        (`host`: `host_fields()`)."""
         if not self.gas.pressure_probes:
             return {}
-        fluid = self.solid == 0
-        count = fluid.sum(axis=(0, 1))
-        total = np.where(fluid, host["p"], 0.0).sum(axis=(0, 1))
-        means = np.divide(total, count, out=np.full(len(count), np.nan), where=count > 0)
-        centres = self.gg.lo[2] + (np.arange(self.gg.cells[2]) + 0.5) * self.gg.h[2]
-        return {probe_column(z): float(np.interp(z, centres, means)) for z in self.gas.pressure_probes}
+        return probe_pressures(self.gas.pressure_probes, host["p"], self.solid == 0, self.gg.lo, self.gg.h)
 
     def summary(self) -> dict:
         host = self.host_fields()

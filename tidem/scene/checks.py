@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from itertools import combinations_with_replacement
 
 from tidem.scene.heat_checks import heat_checks
@@ -79,10 +80,17 @@ def gas_checks(scene: Scene) -> list[str]:
                         f"cells themselves (cloud-in-cell over two cells, {own:g} m), so it would change nothing; "
                         f"give more than {own:g} m, or remove the key for the default ({AVERAGING_GRAINS:g} grain diameters, "
                         f"{AVERAGING_GRAINS * largest_grain(scene):g} m, where longer than the cells' own)")
-    for i, z in enumerate(gas.pressure_probes):
-        if not dom.min[2] <= z <= dom.max[2]:
-            errs.append(f"gas.pressure_probes[{i}]: height {z:g} m lies outside the domain's z range "
-                        f"{dom.min[2]:g}..{dom.max[2]:g} m; give heights in the scene's coordinates")
+    for i, probe in enumerate(gas.pressure_probes):
+        point = probe if isinstance(probe, tuple) else (None, None, probe)
+        for a, value in enumerate(point):
+            if value is not None and not dom.min[a] <= value <= dom.max[a]:
+                errs.append(f"gas.pressure_probes[{i}]: {'xyz'[a]} = {value:g} m lies outside the domain's {'xyz'[a]} range "
+                            f"{dom.min[a]:g}..{dom.max[a]:g} m; give the probe in the scene's coordinates")
+        for j, tube in enumerate(scene.tubes if isinstance(probe, tuple) else []):
+            across = [a for a in range(3) if AXES[a] != tube.axis]
+            if math.dist([probe[a] for a in across], [tube.center[a] for a in across]) < 0.5 * tube.diameter:
+                errs.append(f"gas.pressure_probes[{i}]: the point {list(probe)} lies inside tubes[{j}]; "
+                            "place the probe in the gas, e.g. on the tube's surface or beside it")
     for i, nz in enumerate(gas.nozzles):
         for key, a in (("x", 0), ("y", 1)):
             r = getattr(nz, key)

@@ -8,7 +8,7 @@ from typing import Annotated, Literal
 from pydantic import Field, StrictBool, StrictInt, field_validator, model_validator
 
 from tidem.scene.schedule import ScheduledNonNegative, ScheduledPositive
-from tidem.scene.types import NonNegative, Number, Positive, Strict
+from tidem.scene.types import NonNegative, Number, Positive, Strict, Vec3
 
 
 class Nozzle(Strict):
@@ -59,7 +59,8 @@ class Gas(Strict):
     tolerance: Positive = 1e-8
     max_iterations: StrictInt = Field(default=2000, ge=1)
     min_voidage: Number = Field(default=0.3, gt=0, lt=1)
-    pressure_probes: list[Number] = []
+    pressure_probes: list[Number | Vec3] = []
+    side_walls: Literal["free_slip", "no_slip"] = "free_slip"
     oxygen: Oxygen | None = None
 
     @field_validator("averaging_length", mode="before")
