@@ -15,20 +15,16 @@ from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
 from tidem.kernels.gas_smoothing import plan_filter
-from tidem.scene.sizes import AVERAGING_GRAINS, largest_grain
+from tidem.scene.sizes import AVERAGING_GRAINS, gas_cell_counts, largest_grain
 
 
 def gas_grid(scene) -> GasGrid:
     """Cells of about `gas.cell_size` (a whole number per axis) over the domain."""
     dom = scene.domain
-    cells, h = [], []
-    for a in range(3):
-        length = dom.max[a] - dom.min[a]
-        n = max(1, int(round(length / scene.gas.cell_size)))
-        cells.append(n)
-        h.append(length / n)
+    cells = gas_cell_counts(scene)
+    h = [(dom.max[a] - dom.min[a]) / cells[a] for a in range(3)]
     periodic = tuple("xyz"[a] in dom.periodic for a in range(3))
-    return GasGrid(lo=tuple(dom.min), cells=tuple(cells), h=tuple(h), periodic=periodic)
+    return GasGrid(lo=tuple(dom.min), cells=cells, h=tuple(h), periodic=periodic)
 
 
 def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:

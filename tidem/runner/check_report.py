@@ -70,10 +70,11 @@ def gas_notes(model) -> list[str]:
     cell across a walled axis."""
     gg = gas_grid(model.scene)
     size = model.scene.gas.cell_size
+    size = "[" + ", ".join(f"{h:g}" for h in size) + "]" if isinstance(size, tuple) else f"{size:g}"
     notes = [f"note: the gas grid has {gg.cells[2]} cell(s) up, so it does not resolve the bed's height; a smaller "
-             f"gas.cell_size (now {size:g} m)"] if gg.cells[2] < 3 else []
+             f"gas.cell_size (now {size} m)"] if gg.cells[2] < 3 else []
     notes += [f"note: the gas grid has one cell across {'xy'[a]} between walls, so the gas flow does not resolve "
-              f"it; a smaller gas.cell_size (now {size:g} m)" for a in range(2) if gg.cells[a] == 1 and not gg.periodic[a]]
+              f"it; a smaller gas.cell_size (now {size} m)" for a in range(2) if gg.cells[a] == 1 and not gg.periodic[a]]
     return notes
 
 

@@ -8,7 +8,8 @@ from itertools import combinations_with_replacement
 from tidem.scene.heat_checks import heat_checks
 from tidem.scene.schedule import is_scheduled
 from tidem.scene.schema import Scene
-from tidem.scene.sizes import AVERAGING_GRAINS, largest_diameter, largest_grain, max_diameter, parcel_ratios
+from tidem.scene.sizes import (AVERAGING_GRAINS, gas_cell_counts, largest_diameter, largest_grain, max_diameter,
+                               parcel_ratios)
 
 AXES = "xyz"
 
@@ -65,15 +66,12 @@ def gas_checks(scene: Scene) -> list[str]:
     if "z" in dom.periodic:
         errs.append("gas: the gas flows from the distributor (bottom) to the outlet (top); remove 'z' from domain.periodic")
     dmax = max_diameter(scene)
-    sizes = []
-    for a in range(3):
-        length = dom.max[a] - dom.min[a]
-        sizes.append(length / max(1, round(length / gas.cell_size)))
+    counts = gas_cell_counts(scene)
+    sizes = [(dom.max[a] - dom.min[a]) / counts[a] for a in range(3)]
     if min(sizes) < 2 * dmax:
         errs.append(f"gas.cell_size: cells of {min(sizes):g} m are smaller than 2 particle diameters ({2 * dmax:g} m), "
                     f"so the voidage is not a local average; use cell_size >= {3 * dmax:g} (about 3 diameters)")
     if gas.averaging_length not in (None, "cells"):
-        counts = [round((dom.max[a] - dom.min[a]) / sizes[a]) for a in range(3)]
         own = 2 * max(h for h, n in zip(sizes, counts) if n > 1)  # eq. (1) of kernels/gas_smoothing.py
         if gas.averaging_length <= own:
             errs.append(f"gas.averaging_length: {gas.averaging_length:g} m is no longer than the averaging of the gas "

@@ -43,7 +43,7 @@ class Gas(Strict):
     density: Positive = 1.2
     viscosity: Positive = 1.8e-5
     heat_capacity: Positive = 1005.0
-    cell_size: Positive
+    cell_size: Positive | tuple[Positive, Positive, Positive]
     inlet_velocity: ScheduledNonNegative = 0.0
     inlet_ramp: NonNegative = 0.0
     nozzles: list[Nozzle] = []

@@ -5,6 +5,18 @@ from __future__ import annotations
 from tidem.scene.schema import Scene
 
 
+def gas_cell_sizes(gas) -> tuple[float, float, float]:
+    """`gas.cell_size` per axis [m]: one size for every axis, or [x, y, z]."""
+    size = gas.cell_size
+    return tuple(size) if isinstance(size, tuple) else (size, size, size)
+
+
+def gas_cell_counts(scene) -> tuple[int, int, int]:
+    """Gas cells per axis: a whole number (at least 1) of cells of about `gas.cell_size`."""
+    dom = scene.domain
+    return tuple(max(1, round((dom.max[a] - dom.min[a]) / h)) for a, h in enumerate(gas_cell_sizes(scene.gas)))
+
+
 def largest_diameter(dist) -> float:
     """Largest diameter a size distribution can produce [m]: its cut-off (an open normal or
     log-normal, allowed only with zero spread, gives its mean or median)."""

@@ -23,7 +23,7 @@ from pathlib import Path
 from tidem.gas.geometry import gas_grid, layers_for, voidage_layers
 from tidem.particles.storage_order import sorts_storage
 from tidem.scene.averaging_layout import cell_grid
-from tidem.scene.sizes import largest_parcel, max_diameter, parcel_count
+from tidem.scene.sizes import gas_cell_counts, largest_parcel, max_diameter, parcel_count
 from tidem.sim.features import scene_features
 from tidem.walls.mesh_bins import mesh_field_bytes
 
@@ -207,7 +207,7 @@ def scene_items(scene) -> list[Item]:
     items.append(Item(f"the {format_count(cells)} broad-phase cells", cells * CELL_BYTES, "domain",
                       "use a smaller domain"))
     if scene.gas is not None:
-        cells = math.prod(max(1, round(n / scene.gas.cell_size)) for n in lengths)
+        cells = math.prod(gas_cell_counts(scene))
         layers = layers_for(scene, dmin)
         items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * (gas_cell_bytes(feat, layers)
                           + GAS_HOST_BYTES_PER_CELL), "gas.cell_size", "use larger gas cells or a smaller domain"))
