@@ -3,9 +3,10 @@
 The suite compiles the kernels of many small scenes once each, so it compiles them without
 Taichi's IR optimization (`TIDEM_COMPILE=fast`, see `tidem/runtime/startup.py`): a third of the compile
 time for the same kernels. README's test command runs two pytest-xdist
-workers, because compiling is single-threaded. Each test starts on a fresh Taichi program
+workers, because compiling is single-threaded; each worker's kernels run on its share of the cores
+(one thread each on 2 cores), not both on all of them. Each test starts on a fresh Taichi program
 (`fresh_taichi`), so that the kernels of a scene another test (in either worker) built first come
-from Taichi's kernel cache.
+from Taichi's kernel cache, which is allowed 1 GiB for that.
 """
 
 import copy
@@ -15,6 +16,12 @@ import pytest
 
 os.environ.setdefault("TIDEM_COMPILE", "fast")
 os.environ.setdefault("TI_ENABLE_PYBUF", "0")  # pytest's captured stdout would make Taichi print after every launch
+if os.environ.get("PYTEST_XDIST_WORKER_COUNT"):  # the cores shared among the workers, not each worker on all of them
+    workers = int(os.environ["PYTEST_XDIST_WORKER_COUNT"])
+    os.environ.setdefault("TI_CPU_MAX_NUM_THREADS", str(max(1, (os.cpu_count() or 1) // workers)))
+# the suite's kernels fill more than Taichi's default 100 MB cache, which then drops the least recently used
+# quarter at every restart, among them kernels a later test would have found
+os.environ.setdefault("TI_OFFLINE_CACHE_MAX_SIZE_OF_FILES", str(1 << 30))
 
 from tidem.runtime.startup import ensure_taichi, restart  # noqa: E402  (after TIDEM_COMPILE is set)
 
