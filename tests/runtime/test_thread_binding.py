@@ -12,10 +12,10 @@ from tidem.runtime.thread_binding import bind_workers, one_cpu_per_core, process
 @pytest.mark.skipif(len(os.sched_getaffinity(0)) != (os.cpu_count() or 0) or len(os.sched_getaffinity(0)) < 2,
                     reason="binds by default only where the process may use every CPU, two or more")
 def test_session_workers_are_bound_one_per_cpu():
-    startup.ensure_taichi("cpu", "float64")  # conftest's start (again, if a test before started another)
     cpus = os.sched_getaffinity(0)
+    startup.ensure_taichi("cpu", "float64", len(cpus))  # a start on every CPU (the suite's xdist workers take a share)
     bound = startup.bound_workers
-    assert len(bound) == len(cpus)  # conftest's ensure_taichi: as many workers as CPUs
+    assert len(bound) == len(cpus)  # as many workers as CPUs
     assert sorted(len(os.sched_getaffinity(t)) for t in bound) == [1] * len(cpus)
     assert set.union(*(os.sched_getaffinity(t) for t in bound)) == cpus  # one on each
     ran: set[int] = set()  # threads that run a parallel loop (others, such as pytest-xdist's, may too)
