@@ -19,9 +19,8 @@ deposited drag coefficients of `gas_coupling`, per cell volume V):
       CPU solve it directly instead (banded Cholesky, `kernels/gas_band.py`).
 Boundaries: inlet faces at the bottom carry a set superficial velocity (eps_f u_f = U_in);
 the top is a pressure outlet (p = 0 on the face); other box sides and faces of solid cells
-(cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient), free-slip
-or, with `no_slip`, holding the gas still on the side walls (ghost value -u in the viscous term);
-periodic axes wrap.
+(cells whose centre lies in a tube) are walls (u_f = 0, zero normal pressure gradient), the side walls
+free-slip or, with `no_slip`, holding the gas still (ghost value -u in the viscous term); periodic axes wrap.
 Cut faces (meshes in the gas, `tidem.gas.apertures`): a face open over the share a_f of its area
 carries the flux a_f eps_f u_f, u_f the gas velocity in its open part, and a cell whose gas part
 is the share f of it holds f V of gas, so that the pressure equation reads
@@ -77,8 +76,8 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     pressure solve band_solve (fields band, band_y). With `open_faces` (tubes or meshes in the gas) a face's drag
     B_f, Bv_f acts over its open volume, G.open_face[c] times the face's volume (`tidem.gas.open_volume`). With
     `cut_faces` (meshes in the gas) each face carries its aperture G.aperture[c] and each cell its gas part's
-    share G.part of its volume (`tidem.gas.apertures`): the fluxes a_f S_f (eps u)_f and the volume f V.
-    `no_slip`: the box's side walls (x, y; not periodic) hold the gas still (module docstring)."""
+    share G.part of its volume (`tidem.gas.apertures`): the fluxes a_f S_f (eps u)_f and the volume f V. `no_slip`:
+    the box's side walls (x, y; not periodic) hold the gas still (module docstring)."""
     cic, corner, weight, corners = make_cic(gg)
     n = gg.cells
     small = serial_solve(n[0] * n[1] * n[2])
@@ -87,7 +86,6 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
     faces = [gg.face_shape(c) for c in range(3)]
     batch = cg_batch()
     per = gg.periodic
-    still = tuple(no_slip and a < 2 and not per[a] for a in range(3))  # side walls that hold the gas still
     h = ti.Vector(list(gg.h))
     lo = ti.Vector(list(gg.lo))
     nu = mu / rho
@@ -175,7 +173,7 @@ def make_flow_kernels(gg, G, rho: float, mu: float, gravity, heat: bool = False,
                     for a in ti.static(range(3)):
                         e = unit(a)
                         up, down = U[c][face_index(I + e, c)], U[c][face_index(I - e, c)]
-                        if ti.static(still[a] and a != c):  # the mirror value beyond a wall holding the gas still
+                        if ti.static(no_slip and a < 2 and a != c and not per[a]):  # mirror beyond a no-slip wall
                             up, down = ti.select(I[a] == n[a] - 1, -U[c][I], up), ti.select(I[a] == 0, -U[c][I], down)
                         lap += (up - 2.0 * U[c][I] + down) / (h[a] * h[a])
                     inv_vol = 1.0 / vol
