@@ -22,3 +22,11 @@ def test_a_cell_size_per_axis_sets_each_axis_and_is_checked_per_axis():
     assert any("one cell across y between walls" in note and "[0.005, 0.008, 0.005]" in note for note in gas_notes(Model))
     with pytest.raises(SceneError, match=r"gas.cell_size: cells of 0.0025 m are smaller than 2 particle diameters"):
         load("pseudo2d_bubbling_bed", ["gas.cell_size=[0.0025, 0.008, 0.005]"])
+
+
+def test_a_size_per_axis_that_is_not_positive_is_refused_in_one_line():
+    """A non-positive size per axis or alone: one message naming gas.cell_size, not one per form of the key."""
+    for bad, shown in (("[0.005, -0.008, 0.005]", r"every size must be > 0 \(got \[0.005, -0.008, 0.005\]\)"),
+                       ("-0.005", r"must be > 0 \(got -0.005\)")):
+        with pytest.raises(SceneError, match=r"1 error in the scene\n  gas.cell_size: " + shown):
+            load("pseudo2d_bubbling_bed", [f"gas.cell_size={bad}"])

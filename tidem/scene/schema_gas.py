@@ -74,6 +74,17 @@ class Gas(Strict):
             raise ValueError(f"must be > 0 (got {value})")
         return value
 
+    @field_validator("cell_size", mode="before")
+    @classmethod
+    def _size_or_sizes(cls, value):
+        """One message for a size per axis that is not positive, in place of one per branch of the union."""
+        if isinstance(value, list) and len(value) == 3 and all(type(v) in (int, float) for v in value) \
+                and min(value) <= 0:
+            raise ValueError(f"every size must be > 0 (got {value})")
+        if type(value) in (int, float) and not value > 0:
+            raise ValueError(f"must be > 0 (got {value})")
+        return value
+
 
 class CharCombustion(Strict):
     """C + O2 at the surface of each particle of a group, kinetics in series with the gas film."""
