@@ -97,11 +97,18 @@ def test_time_means_take_the_second_half():
 def test_single_impact_run_writes_restitution_of_the_material(tmp_path):
     out = tmp_path / "impact"
     result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render",
-                                 "--set", "materials.sus304.restitution=0.5"])
+                                 "--set", "materials.sus304.restitution=0.5", "--set", ('observables=["contact_time", '
+                                 '"impact_heat", "restitution", "kinetic_energy", "granular_temperature"]')])
     assert result.exit_code == 0, result.output
     run = json.loads((out / "run.json").read_text())
     found = obs.flatten(run["observables"])
-    assert set(run["observables"]) == {"contact_time", "impact_heat", "restitution", "kinetic_energy"}
+    assert set(run["observables"]) == {"contact_time", "impact_heat", "restitution", "kinetic_energy",
+                                       "granular_temperature"}
+    # after the impacts each sphere moves off at half its speed; cubes of 6 diameters (114.6 mm from the domain's
+    # corner) hold the first two pairs in one cell and the third in the next: n/(n - 1) of each cell's spread
+    a, b, c = 0.5 * 0.845, 0.5 * 1.01, 0.5 * 1.125
+    theta = (4 / 3 * 2 * (a**2 + b**2) + 2 * 2 * c**2) / (3 * 6)
+    assert found["granular_temperature_m2_s2"] == pytest.approx(theta, rel=0.02)
     gains = [row["heat_gained_J"] for row in run["impact_heat"]]
     assert min(gains) < 0 < max(gains), "hot spheres lose what cold ones gain"
     assert found["restitution"] == pytest.approx(0.5, rel=0.01)
@@ -143,3 +150,44 @@ def test_discharge_rate_is_the_slope_of_the_steady_window():
     rec.series["discharged_mass_kg"] = t**2
     got = obs.discharge_rate(rec)
     assert got["discharge_rate_late_kg_s"] > 1.2 * got["discharge_rate_early_kg_s"]
+
+
+def test_centre_of_mass_of_a_lattice_and_its_time_mean_from_the_potential_energy():
+    rec = lattice_record(spacing=0.002, layers=5)
+    mass = rec.mass.sum()
+    t = np.linspace(0.0, 1.0, 11)
+    z_c = np.where(t < 0.5, 0.1, 0.004 + 0.002 * (t > 0.75))
+    rec.series = {"time_s": t, "potential_energy_J": mass * 9.81 * z_c}
+    got = obs.centre_of_mass(rec)
+    assert got["centre_of_mass_m"] == pytest.approx(2.5 * 0.002), "the mean of the layers' centres"
+    assert got["centre_of_mass_mean_m"] == pytest.approx((3 * 0.004 + 3 * 0.006) / 6)
+
+
+def test_granular_temperature_by_hand_and_of_a_maxwellian_gas_in_a_shearing_flow():
+    from tidem.results.granular import granular_temperature
+
+    # two particles of 1 kg at +-1 m/s (spread 2, x 2/1); three of 2 kg at 0, 0, 3 m/s (mean 1, spread 12, x 3/2);
+    # one alone in its cell (left out)
+    x = np.array([[0.1, 0.1, 0.1], [0.2, 0.2, 0.2], [1.1, 0.1, 0.1], [1.2, 0.3, 0.4], [1.5, 0.5, 0.5], [0.5, 1.5, 0.5]])
+    v = np.array([[1.0, 0, 0], [-1, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 3], [7, 7, 7]])
+    m = np.array([1.0, 1, 2, 2, 2, 5])
+    assert granular_temperature(x, v, m, np.zeros(3), 1.0, (2, 2, 1)) == pytest.approx((4 + 18) / (3 * 8))
+    # velocities of variance theta0 per component about a mean flow that shears with height: the cells' means
+    # take the flow out and n/(n - 1) the bias of a mean from few particles (about 5 a cell)
+    rng = np.random.default_rng(1)
+    x = rng.uniform(0.0, 0.1, (40_000, 3))
+    theta0 = 0.01
+    v = rng.normal(0.0, np.sqrt(theta0), x.shape) + np.stack([50 * np.floor(x[:, 2] / 0.005) * 0.005, 0 * x[:, 0],
+                                                              0 * x[:, 0]], axis=1)
+    got = granular_temperature(x, v, rng.uniform(1.0, 2.0, len(x)), np.zeros(3), 0.005, (20, 20, 20))
+    assert got == pytest.approx(theta0, rel=0.02)
+
+
+def test_centre_of_mass_needs_a_closed_bed_under_gravity_along_minus_z():
+    from tidem.scene.observable_names import requirement
+
+    scene = load("fluidized_tube").scene
+    assert requirement("centre_of_mass", scene) is None
+    sideways = scene.model_copy(update={"domain": scene.domain.model_copy(update={"gravity": (9.81, 0.0, 0.0)})})
+    assert "gravity along -z" in requirement("centre_of_mass", sideways)
+    assert "no [outlet]" in requirement("centre_of_mass", load("hopper_discharge").scene)

@@ -34,6 +34,7 @@ def variant_line(res: dict) -> None:
 
 def run_variants(path, vary, set_, out, workers, scheduler, reference, with_error: bool, threads=None) -> None:
     from tidem.studies import tradeoff as tr
+    from tidem.studies.seed_groups import seed_groups, write_groups
 
     loaded = load_scene(path, set_)
     try:
@@ -58,6 +59,10 @@ def run_variants(path, vary, set_, out, workers, scheduler, reference, with_erro
     results, ref = tr.with_errors(results, reference) if with_error else (results, -1)
     tr.write_report(results, ref, out_dir, with_error)
     typer.echo((out_dir / ("tradeoff.md" if with_error else "sweep.md")).read_text())
+    grouped = seed_groups(results, ref) if with_error else None
+    if grouped is not None:  # seeds varied: each variant's realisations together
+        write_groups(*grouped, out_dir)
+        typer.echo((out_dir / "tradeoff_groups.md").read_text())
 
 
 @app.command()
@@ -77,7 +82,10 @@ def tradeoff(
 ):
     """Run variants of a scene in parallel: wall time, particle-steps/s and observables against a reference.
 
-    Each observable's error is against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png)."""
+    Each observable's error is against the reference variant (tradeoff.csv, tradeoff.md, tradeoff.png). With a
+    varied seed (e.g. --vary particles[0].seed=1,2,3) the variants that differ only in it are also taken
+    together: each observable's mean, the seeds' range and the deviation from the reference's group, and the
+    speed-up (tradeoff_groups.csv, .md, .png)."""
     set_ = with_observables(set_, observables)
     loaded = load_scene(path, set_)
     if not loaded.scene.observables:

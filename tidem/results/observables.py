@@ -49,6 +49,8 @@ class RunRecord:
     """Initial velocities of the same particles [m/s], shape [n, 3]."""
     floor_z: float
     """Height of the bed's floor at the end [m]: the outlet plate, else the domain's min z."""
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    """The scene's gravity [m/s^2]."""
     series: dict[str, np.ndarray] = field(default_factory=dict)
     """timeseries.csv as columns."""
     temperature: np.ndarray | None = None
@@ -81,7 +83,8 @@ def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | No
     x, radius = S.x.to_numpy()[active], S.radius.to_numpy()[active]
     return RunRecord(
         time_s=solver.t, x=x, v=S.v.to_numpy()[active], mass=model.mass[ident],
-        radius=radius, v0=model.v0[ident], floor_z=float(floor), series=series,
+        radius=radius, v0=model.v0[ident], floor_z=float(floor), gravity=tuple(model.scene.domain.gravity),
+        series=series,
         temperature=S.T.to_numpy()[active] if model.features.heat else None,
         alpha_means=means,
         contact_rows=contact_times(model, solver) if model.features.contact_time else [],
@@ -161,6 +164,19 @@ def bed_height(rec: RunRecord) -> dict[str, float]:
     column bed_height_m; a bubbling bed heaves, so its end value is one instant of that)."""
     mean = _late_mean(rec, "bed_height_m") if "bed_height_m" in rec.series else None
     return {"bed_height_m": _top(rec), "bed_height_mean_m": mean}
+
+
+@observable("centre_of_mass")
+def centre_of_mass(rec: RunRecord) -> dict[str, float]:
+    """Height of the particles' centre of mass [m] (absolute z): at the end, sum m z / M
+    (`centre_of_mass_m`), and its time mean over the second half (`centre_of_mass_mean_m`) from the
+    timeseries column potential_energy_J = sum m |g| z, divided by M |g|. A bed's expansion that, unlike
+    the bed height, no few particles at its surface decide, and that parcels of any size weigh alike;
+    it needs gravity along -z and a bed whose mass M stays the same (no outlet, no pour)."""
+    mass = float(rec.mass.sum())
+    mean = (_late_mean(rec, "potential_energy_J") / (mass * abs(rec.gravity[2]))
+            if "potential_energy_J" in rec.series else None)
+    return {"centre_of_mass_m": float(np.dot(rec.mass, rec.x[:, 2]) / mass), "centre_of_mass_mean_m": mean}
 
 
 @observable("outlet_mass_flow")
@@ -276,6 +292,16 @@ def kinetic_energy(rec: RunRecord) -> dict[str, float]:
     """Translational kinetic energy of the particles at the end [J] (`kinetic_energy_J`),
     sum_i m_i |v_i|^2 / 2."""
     return {"kinetic_energy_J": float(0.5 * np.sum(rec.mass * np.einsum("ij,ij->i", rec.v, rec.v)))}
+
+
+@observable("granular_temperature")
+def granular_temperature(rec: RunRecord) -> dict[str, float]:
+    """The solids' granular temperature [m^2/s^2] (`granular_temperature_m2_s2`): time mean over the second
+    half of the timeseries column of the same name, each sample's theta = sum n/(n - 1) sum m |v - u_cell|^2 /
+    (3 sum m) over cubes of 6 diameters of the largest grain that hold two particles or more
+    (`tidem.results.granular`); per grain at any coarse graining."""
+    column = "granular_temperature_m2_s2"
+    return {column: _late_mean(rec, column) if column in rec.series else None}
 
 
 @observable("impact_heat")

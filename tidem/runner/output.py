@@ -19,9 +19,11 @@ from tidem.io.vtp import write_pvd, write_vti, write_vtp
 from tidem.kernels.field_copy import FieldCopier
 from tidem.results.averaging import AverageRecorder
 from tidem.results.bed_profiles import CSV_NAME, ProfileRecorder, profile_rows, write_csv
+from tidem.results.granular import GranularSampler
 from tidem.results.tables import alpha_profile, tube_alpha_columns
 from tidem.runner.output_size import cadence
 from tidem.runner.reaction_output import ReactionLog
+from tidem.scene.sizes import largest_diameter
 from tidem.sim.model import Model
 from tidem.sim.solver import Solver
 from tidem.walls.surfaces import plate_z
@@ -69,6 +71,7 @@ class Output:
         self.series = TimeSeries(self.dir / "timeseries.csv", loop["series_rows"] if loop else None)
         # the column bed_height_m: the bed_height observable's height at each sample
         self.bed_height = model.features.gas or "bed_height" in model.scene.observables
+        self._granular: GranularSampler | None = None  # the column granular_temperature_m2_s2 (`granular`)
         self.reactions = (ReactionLog(self.dir, model, [tuple(r) for r in loop.get("reaction_rows", [])] if loop else None)
                           if model.features.reactions else None)
         self.profiles = (ProfileRecorder(model, loop.get("profiles") if loop else None)
@@ -88,6 +91,16 @@ class Output:
         if solver.gas is not None:
             solver.gas.host_fields()
         self._particle_copier(solver).read()
+        if self.granular(solver) is not None:
+            self.granular(solver).sample()
+
+    def granular(self, solver: Solver) -> GranularSampler | None:
+        """The granular temperature's sampler where the scene declares the observable (else None)."""
+        scene = self.model.scene
+        if self._granular is None and "granular_temperature" in scene.observables:
+            grain = max(largest_diameter(g.diameter) for g in scene.particles)
+            self._granular = GranularSampler(solver.state, scene.domain, grain)
+        return self._granular
 
     def _particle_copier(self, solver: Solver) -> FieldCopier:
         """The snapshot's particle fields, read in one launch per element type."""
@@ -184,6 +197,8 @@ class Output:
             stats = solver.particle_stats.sample(solver.n, self.bed_height)
         if self.bed_height:
             row["bed_height_m"] = stats.pop("bed_top")
+        if self.granular(solver) is not None:
+            row["granular_temperature_m2_s2"] = self.granular(solver).sample()
         row.update(solver.outlet_summary(tallies))
         if self.model.features.heat:
             row.update(stats)

@@ -40,6 +40,15 @@ def _heated_mesh(scene) -> str | None:
     return None
 
 
+def _closed_bed_under_gravity(scene) -> str | None:
+    g = scene.domain.gravity
+    if g[0] != 0.0 or g[1] != 0.0 or g[2] >= 0.0:
+        return f"needs gravity along -z (domain.gravity is {list(g)})"
+    if scene.outlet is not None or any(p.pour is not None for p in scene.particles):
+        return "needs a bed whose mass stays the same: no [outlet] and no poured group"
+    return None
+
+
 def _heat_and_gas(scene) -> str | None:
     return None if scene.heat is not None and scene.gas is not None else \
         "needs a [heat] and a [gas] table (a bed heated by the gas)"
@@ -49,6 +58,7 @@ NEEDS: dict[str, Callable | None] = {
     "tube_heat": _heated_tube,
     "tube_mean_alpha": _heated_tube,
     "bed_height": None,
+    "centre_of_mass": _closed_bed_under_gravity,
     "outlet_mass_flow": None,
     "discharge_rate": _sink,
     "wall_heat_transfer": _heated_mesh,
@@ -58,6 +68,7 @@ NEEDS: dict[str, Callable | None] = {
     "pressure_drop": _gas,
     "pressure_fluctuation": _gas,
     "kinetic_energy": None,
+    "granular_temperature": None,
     "impact_heat": _heat,
     "packet_model": _moving_bed_tube,
     "packed_bed_profiles": _heat_and_gas,
