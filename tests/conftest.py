@@ -39,7 +39,7 @@ def fresh_taichi():
 QUICK = ("tests/test_import_graph.py", "tests/scene/", "tests/io/", "tests/analytic/", "tests/walls/test_mesh_input.py",
          "tests/results/test_hydrodynamics.py", "tests/heat/test_packet_model.py", "tests/heat/test_impact_conduction.py",
          "tests/runtime/test_phases.py", "tests/cli/test_crash.py", "tests/render/test_settings.py",
-         "tests/kernels/test_contact.py", "tests/kernels/test_heat.py",
+         "tests/kernels/test_contact.py", "tests/kernels/test_heat.py", "tests/studies/test_seed_groups.py",
          "tests/kernels/test_gas.py::test_packed_bed_pressure_gradient_is_ergun")
 """The edit loop's selection (`pytest -n 2 -m quick`, README): the scene schema and its errors, the
 layers, files, closed-form models, mesh files, the contact and heat kernels and a packed bed's gas;
