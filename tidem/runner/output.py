@@ -91,8 +91,9 @@ class Output:
         if solver.gas is not None:
             solver.gas.host_fields()
         self._particle_copier(solver).read()
-        if self.granular(solver) is not None:
-            self.granular(solver).sample()
+        granular = self.granular(solver)
+        if granular is not None:
+            granular.sample()
 
     def granular(self, solver: Solver) -> GranularSampler | None:
         """The granular temperature's sampler where the scene declares the observable (else None)."""
@@ -197,8 +198,9 @@ class Output:
             stats = solver.particle_stats.sample(solver.n, self.bed_height)
         if self.bed_height:
             row["bed_height_m"] = stats.pop("bed_top")
-        if self.granular(solver) is not None:
-            row["granular_temperature_m2_s2"] = self.granular(solver).sample()
+        granular = self.granular(solver)
+        if granular is not None:
+            row["granular_temperature_m2_s2"] = granular.sample()
         row.update(solver.outlet_summary(tallies))
         if self.model.features.heat:
             row.update(stats)
