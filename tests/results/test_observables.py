@@ -191,3 +191,63 @@ def test_centre_of_mass_needs_a_closed_bed_under_gravity_along_minus_z():
     sideways = scene.model_copy(update={"domain": scene.domain.model_copy(update={"gravity": (9.81, 0.0, 0.0)})})
     assert "gravity along -z" in requirement("centre_of_mass", sideways)
     assert "no [outlet]" in requirement("centre_of_mass", load("hopper_discharge").scene)
+
+
+def write_heights(folder: Path, times, heights, ids=None) -> list[tuple[float, Path]]:
+    """Snapshots at `times` of particles at heights[i] (x = y = 0), ids 0.. unless given; [(time, file)]."""
+    from tidem.io.vtp import write_vtp
+
+    out = []
+    for i, (t, z) in enumerate(zip(times, heights)):
+        n = len(z)
+        idx = np.arange(n) if ids is None else ids[i]
+        x = np.zeros((n, 3))
+        x[:, 2] = z
+        path = folder / f"snap_{i:05d}.vtp"
+        write_vtp(path, x, {"id": np.asarray(idx, np.int32), "radius": np.full(n, 1e-3)}, time=t)
+        out.append((float(t), path))
+    return out
+
+
+def test_dispersion_of_a_random_walk_and_of_ballistic_motion(tmp_path):
+    from tidem.results.dispersion import run_dispersion
+
+    times = np.arange(21) * 0.01  # snapshots every 0.01 s to 0.2 s: the second half spans every lag
+    rng = np.random.default_rng(3)
+    D = 2e-4  # m^2/s: steps of variance 2 D dt, so <dz^2> = 2 D tau at every lag
+    walk = np.cumsum(rng.normal(0.0, np.sqrt(2 * D * 0.01), (len(times), 40000)), axis=0)
+    found = run_dispersion(write_heights(tmp_path, times, walk), 0.2)
+    assert found["dispersion_m2_s"] == pytest.approx(D, rel=0.03)
+    # ballistic z = v t: <dz^2> = <v^2> tau^2, whose least-squares slope over 0.02-0.1 s is 0.12 <v^2>; the
+    # particles in reverse order, and one more at the rms speed in every other snapshot only, change nothing
+    v = np.append(np.linspace(-0.1, 0.1, 50), np.sqrt(np.mean(np.linspace(-0.1, 0.1, 50) ** 2)))
+    ids = [np.arange(51 - i % 2)[::-1] for i in range(len(times))]
+    heights = [(0.1 + v * t)[idx] for t, idx in zip(times, ids)]
+    (tmp_path / "b").mkdir()
+    found = run_dispersion(write_heights(tmp_path / "b", times, heights, ids), 0.2)
+    assert found["dispersion_m2_s"] == pytest.approx(0.06 * np.mean(v**2), rel=1e-9)
+
+
+def test_dispersion_needs_snapshots_one_lag_apart(tmp_path):
+    from tidem.results.dispersion import run_dispersion
+
+    times = np.arange(11) * 0.03  # 0.03 s apart: only 0.06 s of the lags is spanned
+    found = run_dispersion(write_heights(tmp_path, times, [np.zeros(3)] * len(times)), 0.3)
+    assert found["dispersion_m2_s"] is None
+    assert "output.interval to 0.02 s" in found["dispersion_note"]
+
+
+def test_dispersion_of_a_run_from_its_snapshots(tmp_path):
+    # the impact scene's spheres sent along z at constant speeds (softened, so that the step is long; they do
+    # not touch): ballistic, D = 0.06 <v^2> (above); the snapshots fall on whole steps near every 0.01 s
+    out = tmp_path / "vertical"
+    result = runner.invoke(app, ["scene", "sphere_impact", "--out", str(out), "--quiet", "--no-render",
+                                 "--set", "numerics.t_end=0.2", "--set", "output.interval=0.01",
+                                 "--set", "materials.sus304.youngs_modulus=1e7",
+                                 "--set", "particles[0].velocities=[[0, 0, 0.1], [0, 0, 0.05], [0, 0, -0.05]]",
+                                 "--set", "particles[1].velocities=[[0, 0, -0.1], [0, 0, 0.02], [0, 0, 0]]",
+                                 "--set", 'observables=["dispersion"]'])
+    assert result.exit_code == 0, result.output
+    found = json.loads((out / "run.json").read_text())["observables"]["dispersion"]
+    speeds = np.array([0.1, 0.05, 0.05, 0.1, 0.02, 0.0])
+    assert found["dispersion_m2_s"] == pytest.approx(0.06 * np.mean(speeds**2), rel=0.01)

@@ -21,11 +21,13 @@ next to the simulated mean alpha, `tidem.heat.packet_model`), measured by `tidem
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from tidem.heat.drum_heat import mesh_heat_rows
+from tidem.results.dispersion import run_dispersion
 from tidem.results.hydrodynamics import MIN_PERIODS, bed_top, dominant_frequency, second_half
 from tidem.results.tables import alpha_profile, contact_times, impact_heat_rows, packet_model_rows
 from tidem.scene.observable_names import NEEDS
@@ -67,11 +69,15 @@ class RunRecord:
     """Summary of the packed-bed profiles against Schumann (`tidem.results.bed_profiles.profile_rows`)."""
     mesh_rows: list[dict] = field(default_factory=list)
     """Heat transfer of each heated mesh, and a drum's bed geometry (`tidem.heat.drum_heat`)."""
+    snapshots: list[tuple[float, Path]] = field(default_factory=list)
+    """The run's snapshot files on disk with their times [(s, path)], in time order."""
 
 
-def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None) -> RunRecord:
-    """The RunRecord of a run at its end (after the time series is closed); `bed_profiles` is
-    the packed-bed profile summary the run loop computed, if the scene declares it."""
+def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None,
+           snapshots: list[tuple[float, Path]] | None = None) -> RunRecord:
+    """The RunRecord of a run at its end (after the time series and the snapshots are closed); `bed_profiles`
+    is the packed-bed profile summary the run loop computed, if the scene declares it; `snapshots` the run's
+    snapshot files [(time, path)]."""
     S = solver.state
     active = S.active.to_numpy().astype(bool)
     floor = model.scene.domain.min[2]
@@ -90,7 +96,7 @@ def record(model, solver, series: dict[str, np.ndarray], bed_profiles: dict | No
         contact_rows=contact_times(model, solver) if model.features.contact_time else [],
         impact_rows=impact_heat_rows(model, solver) if "impact_heat" in model.scene.observables else [],
         packet_rows=packet_model_rows(model, means), bed_profiles=bed_profiles,
-        mesh_rows=mesh_heat_rows(model, x, radius, series))
+        mesh_rows=mesh_heat_rows(model, x, radius, series), snapshots=list(snapshots or []))
 
 
 Compute = Callable[[RunRecord], dict[str, float]]
@@ -302,6 +308,16 @@ def granular_temperature(rec: RunRecord) -> dict[str, float]:
     (`tidem.results.granular`); per grain at any coarse graining."""
     column = "granular_temperature_m2_s2"
     return {column: _late_mean(rec, column) if column in rec.series else None}
+
+
+@observable("dispersion")
+def dispersion(rec: RunRecord) -> dict[str, float]:
+    """The solids' vertical dispersion coefficient [m^2/s] (`dispersion_m2_s`), a mixing rate: half the slope
+    of the particles' mean square vertical displacement over lags of 0.02-0.1 s, particles followed by id
+    through the snapshots of the second half (`tidem.results.dispersion`); per grain at any coarse graining.
+    None with `dispersion_note` where the snapshots are too sparse (output.interval above 0.02 s or not a
+    divisor of it)."""
+    return run_dispersion(rec.snapshots, rec.time_s)
 
 
 @observable("impact_heat")

@@ -248,7 +248,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         if steering is not None:
             data["steering"] = [{"time_s": t, "key": key, "value": value} for t, key, value in steering.changes]
         if status == "finished":
-            data.update(observed(model, solver, series, bed_profiles))
+            data.update(observed(model, solver, series, bed_profiles, [(t, out.dir / name) for t, name in out.entries]))
         if out.reactions is not None:  # per reaction group, and flat in observables for tradeoff/sweep
             figures = out.reactions.finish(solver)
             data["reactions"] = figures

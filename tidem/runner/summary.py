@@ -78,13 +78,14 @@ def summary(model: Model, solver: Solver | None, status: str, wall: float, messa
     return out
 
 
-def observed(model: Model, solver: Solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None) -> dict:
+def observed(model: Model, solver: Solver, series: dict[str, np.ndarray], bed_profiles: dict | None = None,
+             snapshots: list | None = None) -> dict:
     """run.json's `observables` (the scene's declared ones, `tidem.results.observables`) and the
-    per-particle or per-time tables behind some of them."""
+    per-particle or per-time tables behind some of them; `snapshots` the run's snapshot files [(time, path)]."""
     names = model.scene.observables
     if not names:
         return {}
-    rec = obs.record(model, solver, series, bed_profiles)
+    rec = obs.record(model, solver, series, bed_profiles, snapshots)
     out = {"observables": obs.compute(names, rec)}
     if bed_profiles:
         out["packed_bed_profiles"] = bed_profiles

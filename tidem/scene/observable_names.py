@@ -49,6 +49,10 @@ def _closed_bed_under_gravity(scene) -> str | None:
     return None
 
 
+def _vertical_open(scene) -> str | None:
+    return "needs z not periodic (heights are followed across the snapshots)" if "z" in scene.domain.periodic else None
+
+
 def _heat_and_gas(scene) -> str | None:
     return None if scene.heat is not None and scene.gas is not None else \
         "needs a [heat] and a [gas] table (a bed heated by the gas)"
@@ -69,6 +73,7 @@ NEEDS: dict[str, Callable | None] = {
     "pressure_fluctuation": _gas,
     "kinetic_energy": None,
     "granular_temperature": None,
+    "dispersion": _vertical_open,
     "impact_heat": _heat,
     "packet_model": _moving_bed_tube,
     "packed_bed_profiles": _heat_and_gas,

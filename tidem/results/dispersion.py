@@ -1,0 +1,79 @@
+"""The solids' vertical dispersion coefficient, a mixing rate, from a run's snapshots (the observable
+`dispersion`, `tidem.results.observables`).
+
+D_z = (1/2) d<(z(t + tau) - z(t))^2>/d tau [m^2/s]: the least-squares slope of the particles' mean square
+vertical displacement against the lag tau over LAGS, halved (Einstein's relation for a random walk; the
+axial dispersion coefficient of a fluidized bed's solids, e.g. Kunii & Levenspiel 1991, ch. 9). Particles are
+followed by their id from snapshot to snapshot, over the pairs of snapshots in the second half of the run
+that lie one lag apart; each lag's mean is over every such pair and every particle present in both. A
+parcel's grains move with it, so the coefficient is per grain at any coarse graining (the grains' motion
+inside a parcel is not in it). The lags start at 0.02 s, past a bubbling bed's ballistic start, and end at
+0.1 s, before the displacements reach the bed's height.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from tidem.io.vtp import read_vtp
+
+LAGS = (0.02, 0.04, 0.06, 0.08, 0.1)  # s
+MATCH = 0.2 * LAGS[0]  # s: two snapshots lie one lag apart within this (their times are whole steps)
+
+
+def heights_by_id(path: Path) -> np.ndarray:
+    """The particles' heights [m] of one snapshot, indexed by their id (NaN for ids not in it)."""
+    x, data = read_vtp(path)
+    ids = data["id"].astype(np.int64)
+    z = np.full(int(ids.max()) + 1 if len(ids) else 0, np.nan)
+    z[ids] = x[:, 2]
+    return z
+
+
+def mean_square_displacements(snapshots: Iterable[tuple[float, np.ndarray]]) -> tuple[list[float], list[float]]:
+    """(lags [s], mean square vertical displacements [m^2]) for each of LAGS that some pair of the
+    `snapshots` spans within MATCH, given in time order as (time [s], heights by id (`heights_by_id`)); each
+    lag is the mean time between its pairs (snapshots fall on whole steps). Holds only the snapshots of the
+    last LAGS[-1] in memory."""
+    squares, spans, counts = np.zeros(len(LAGS)), np.zeros(len(LAGS)), np.zeros(len(LAGS), np.int64)
+    recent: deque[tuple[float, np.ndarray]] = deque()
+    for t, z in snapshots:
+        while recent and t - recent[0][0] > LAGS[-1] + MATCH:
+            recent.popleft()
+        for t0, z0 in recent:
+            for j, lag in enumerate(LAGS):
+                if abs(t - t0 - lag) <= MATCH:
+                    n = min(len(z), len(z0))
+                    step = z[:n] - z0[:n]
+                    step = step[np.isfinite(step)]
+                    squares[j] += float(np.dot(step, step))
+                    spans[j] += (t - t0) * len(step)
+                    counts[j] += len(step)
+        recent.append((t, z))
+    spanned = np.flatnonzero(counts)
+    return [float(spans[j] / counts[j]) for j in spanned], [float(squares[j] / counts[j]) for j in spanned]
+
+
+def dispersion_coefficient(snapshots: Iterable[tuple[float, np.ndarray]]) -> float | None:
+    """D_z [m^2/s] (module docstring) of snapshots as in `mean_square_displacements`; None where fewer than
+    two of LAGS are spanned."""
+    lags, msd = mean_square_displacements(snapshots)
+    if len(lags) < 2:
+        return None
+    return float(np.polyfit(lags, msd, 1)[0] / 2.0)
+
+
+def run_dispersion(snapshots: list[tuple[float, Path]], t_end: float) -> dict[str, float | str | None]:
+    """{"dispersion_m2_s": D_z} over the snapshots [(time, file)] with t >= t_end / 2, or a note saying why
+    there is none (too few snapshots one lag apart)."""
+    late = sorted((t, path) for t, path in snapshots if t >= 0.5 * t_end - 1e-12)
+    value = dispersion_coefficient((t, heights_by_id(path)) for t, path in late)
+    if value is not None:
+        return {"dispersion_m2_s": value}
+    return {"dispersion_m2_s": None,
+            "dispersion_note": f"needs snapshots in the second half that lie {LAGS[0]:g}-{LAGS[-1]:g} s apart at "
+                               f"two lags at least: set output.interval to {LAGS[0]:g} s or a divisor of it"}
