@@ -234,7 +234,7 @@ def test_dispersion_needs_snapshots_one_lag_apart(tmp_path):
     times = np.arange(11) * 0.03  # 0.03 s apart: only 0.06 s of the lags is spanned
     found = run_dispersion(write_heights(tmp_path, times, [np.zeros(3)] * len(times)), 0.3)
     assert found["dispersion_m2_s"] is None
-    assert "output.interval to 0.02 s" in found["dispersion_note"]
+    assert "output.interval = 0.02 s or a divisor of it" in found["dispersion_note"]
 
 
 def test_dispersion_of_a_run_from_its_snapshots(tmp_path):

@@ -75,5 +75,6 @@ def run_dispersion(snapshots: list[tuple[float, Path]], t_end: float) -> dict[st
     if value is not None:
         return {"dispersion_m2_s": value}
     return {"dispersion_m2_s": None,
-            "dispersion_note": f"needs snapshots in the second half that lie {LAGS[0]:g}-{LAGS[-1]:g} s apart at "
-                               f"two lags at least: set output.interval to {LAGS[0]:g} s or a divisor of it"}
+            "dispersion_note": f"needs snapshots in the second half of the run {LAGS[0]:g} and {LAGS[1]:g} s apart at "
+                               f"least: output.interval = {LAGS[0]:g} s or a divisor of it, and t_end of "
+                               f"{2 * LAGS[1]:g} s or more"}
