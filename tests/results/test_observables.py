@@ -226,6 +226,11 @@ def test_dispersion_of_a_random_walk_and_of_ballistic_motion(tmp_path):
     (tmp_path / "b").mkdir()
     found = run_dispersion(write_heights(tmp_path / "b", times, heights, ids), 0.2)
     assert found["dispersion_m2_s"] == pytest.approx(0.06 * np.mean(v**2), rel=1e-9)
+    # snapshots every 0.004 s: only the pairs exactly one lag apart count, not those one snapshot either side
+    dense = np.arange(51) * 0.004
+    (tmp_path / "c").mkdir()
+    found = run_dispersion(write_heights(tmp_path / "c", dense, [0.1 + v * t for t in dense]), 0.2)
+    assert found["dispersion_m2_s"] == pytest.approx(0.06 * np.mean(v**2), rel=1e-9)
 
 
 def test_dispersion_needs_snapshots_one_lag_apart(tmp_path):

@@ -22,7 +22,7 @@ import numpy as np
 from tidem.io.vtp import read_vtp
 
 LAGS = (0.02, 0.04, 0.06, 0.08, 0.1)  # s
-MATCH = 0.2 * LAGS[0]  # s: two snapshots lie one lag apart within this (their times are whole steps)
+MATCH = 0.2 * LAGS[0]  # s: two snapshots lie one lag apart within this, or within half their spacing if less
 
 
 def heights_by_id(path: Path) -> np.ndarray:
@@ -34,19 +34,20 @@ def heights_by_id(path: Path) -> np.ndarray:
     return z
 
 
-def mean_square_displacements(snapshots: Iterable[tuple[float, np.ndarray]]) -> tuple[list[float], list[float]]:
+def mean_square_displacements(snapshots: Iterable[tuple[float, np.ndarray]],
+                              match: float = MATCH) -> tuple[list[float], list[float]]:
     """(lags [s], mean square vertical displacements [m^2]) for each of LAGS that some pair of the
-    `snapshots` spans within MATCH, given in time order as (time [s], heights by id (`heights_by_id`)); each
+    `snapshots` spans within `match` [s], given in time order as (time [s], heights by id (`heights_by_id`)); each
     lag is the mean time between its pairs (snapshots fall on whole steps). Holds only the snapshots of the
     last LAGS[-1] in memory."""
     squares, spans, counts = np.zeros(len(LAGS)), np.zeros(len(LAGS)), np.zeros(len(LAGS), np.int64)
     recent: deque[tuple[float, np.ndarray]] = deque()
     for t, z in snapshots:
-        while recent and t - recent[0][0] > LAGS[-1] + MATCH:
+        while recent and t - recent[0][0] > LAGS[-1] + match:
             recent.popleft()
         for t0, z0 in recent:
             for j, lag in enumerate(LAGS):
-                if abs(t - t0 - lag) <= MATCH:
+                if abs(t - t0 - lag) <= match:
                     n = min(len(z), len(z0))
                     step = z[:n] - z0[:n]
                     step = step[np.isfinite(step)]
@@ -58,10 +59,10 @@ def mean_square_displacements(snapshots: Iterable[tuple[float, np.ndarray]]) -> 
     return [float(spans[j] / counts[j]) for j in spanned], [float(squares[j] / counts[j]) for j in spanned]
 
 
-def dispersion_coefficient(snapshots: Iterable[tuple[float, np.ndarray]]) -> float | None:
+def dispersion_coefficient(snapshots: Iterable[tuple[float, np.ndarray]], match: float = MATCH) -> float | None:
     """D_z [m^2/s] (module docstring) of snapshots as in `mean_square_displacements`; None where fewer than
     two of LAGS are spanned."""
-    lags, msd = mean_square_displacements(snapshots)
+    lags, msd = mean_square_displacements(snapshots, match)
     if len(lags) < 2:
         return None
     return float(np.polyfit(lags, msd, 1)[0] / 2.0)
@@ -71,7 +72,8 @@ def run_dispersion(snapshots: list[tuple[float, Path]], t_end: float) -> dict[st
     """{"dispersion_m2_s": D_z} over the snapshots [(time, file)] with t >= t_end / 2, or a note saying why
     there is none (too few snapshots one lag apart)."""
     late = sorted((t, path) for t, path in snapshots if t >= 0.5 * t_end - 1e-12)
-    value = dispersion_coefficient((t, heights_by_id(path)) for t, path in late)
+    spacing = float(np.median(np.diff([t for t, _ in late]))) if len(late) > 1 else MATCH
+    value = dispersion_coefficient(((t, heights_by_id(path)) for t, path in late), min(MATCH, 0.5 * spacing))
     if value is not None:
         return {"dispersion_m2_s": value}
     return {"dispersion_m2_s": None,

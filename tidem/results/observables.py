@@ -315,8 +315,8 @@ def dispersion(rec: RunRecord) -> dict[str, float]:
     """The solids' vertical dispersion coefficient [m^2/s] (`dispersion_m2_s`), a mixing rate: half the slope
     of the particles' mean square vertical displacement over lags of 0.02-0.1 s, particles followed by id
     through the snapshots of the second half (`tidem.results.dispersion`); per grain at any coarse graining.
-    None with `dispersion_note` where the snapshots are too sparse (output.interval above 0.02 s or not a
-    divisor of it)."""
+    None with `dispersion_note` where the snapshots are too sparse or too few (output.interval not 0.02 s or a
+    divisor of it, or a run shorter than 0.08 s)."""
     return run_dispersion(rec.snapshots, rec.time_s)
 
 
