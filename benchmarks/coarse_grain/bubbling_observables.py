@@ -14,7 +14,7 @@ For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 
   scaled by n / (n - 1) for its n particles (an unbiased variance); a parcel's grains move with it, so
   the parcel's fluctuation is its grains';
 - `dispersion_mm2_s`: vertical dispersion coefficient D_z = slope of <(z(t + tau) - z(t))^2> / 2 over lags
-  tau of LAGS, particles followed by id (a mixing rate);
+  tau of 0.02-0.1 s, particles followed by id (a mixing rate; `tidem.results.dispersion`, the observable's);
 - `alpha_W_m2K`, `tube_heat_W`: time means of the tube's alpha and heat flow, from timeseries.csv.
 Prints one Markdown row per run; `--csv` also writes them. Then, grouping runs whose labels differ only in
 a trailing `_sN` (seeds), one row per group: the mean over its seeds, their range, and the mean's deviation
@@ -32,11 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from tidem.io.vtp import read_vtp
+from tidem.results.dispersion import dispersion_coefficient, indexed_heights
 
 GRAVITY = 9.81
 BED_MASS = 0.03665  # kg: bubbling_tube_slab.toml's 28 000 grains of 1 mm sand at 2500 kg/m^3
 CELL = 0.006  # m: the slab's gas cell
-LAGS = (0.02, 0.04, 0.06, 0.08, 0.1)  # s
 COLUMNS = ("height_mm", "com_mm", "dp_std_Pa", "dp_freq_Hz", "theta_mm2_s2", "dispersion_mm2_s",
            "alpha_W_m2K", "tube_heat_W")
 SHOWN = ("bed height", "centre of mass", "Δp std", "Δp peak", "granular T", "dispersion", "tube alpha",
@@ -78,24 +78,6 @@ def snapshots(run: Path, t_start: float) -> list[tuple[float, Path]]:
     return [(t, p) for t, p in found if t >= t_start - 1e-9]
 
 
-def dispersion(times: np.ndarray, z_by_id: list[dict[int, float]]) -> float:
-    """D_z [m^2/s]: least-squares slope of the mean square vertical displacement over LAGS, halved."""
-    dt = float(np.median(np.diff(times)))
-    lags, msd = [], []
-    for lag in LAGS:
-        step = round(lag / dt)
-        if step < 1 or step >= len(times):
-            continue
-        sq = []
-        for a in range(len(times) - step):
-            za, zb = z_by_id[a], z_by_id[a + step]
-            ids = za.keys() & zb.keys()
-            sq.append(np.mean([(zb[i] - za[i]) ** 2 for i in ids]))
-        lags.append(step * dt)
-        msd.append(np.mean(sq))
-    return float(np.polyfit(lags, msd, 1)[0] / 2) if len(lags) >= 2 else float("nan")
-
-
 def observe(run: Path, t_start: float) -> dict[str, float]:
     with open(run / "timeseries.csv") as f:
         rows = list(csv.DictReader(f))
@@ -107,21 +89,20 @@ def observe(run: Path, t_start: float) -> dict[str, float]:
     freq = np.fft.rfftfreq(1 << 15, dt)
     power = np.abs(np.fft.rfft((dp - dp.mean()) * np.hanning(len(dp)), 1 << 15)) ** 2
     band = freq > 0.5
-    heights, thetas, times, z_by_id = [], [], [], []
+    heights, thetas, z_by_id = [], [], []
     for ts, path in snapshots(run, t_start):
         x, data = read_vtp(path)
         r = data["radius"]
         heights.append(solids_top(x[:, 2], r))
         thetas.append(granular_temperature(x, data["velocity"], r**3))
-        times.append(ts)
-        z_by_id.append(dict(zip(data["id"].tolist(), x[:, 2].tolist())))
+        z_by_id.append((ts, indexed_heights(x, data["id"])))
     return {
         "height_mm": 1e3 * float(np.mean(heights)),
         "com_mm": 1e3 * float(np.mean(col["potential_energy_J"][win]) / (BED_MASS * GRAVITY)),
         "dp_std_Pa": float(dp.std()),
         "dp_freq_Hz": float(freq[band][np.argmax(power[band])]),
         "theta_mm2_s2": 1e6 * float(np.mean(thetas)),
-        "dispersion_mm2_s": 1e6 * dispersion(np.array(times), z_by_id),
+        "dispersion_mm2_s": 1e6 * dispersion_coefficient(z_by_id),
         "alpha_W_m2K": float(np.mean(col["tubes0_alpha_W_m2K"][win])),
         "tube_heat_W": float(np.mean(col["tubes0_heat_W"][win])),
     }

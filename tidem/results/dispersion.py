@@ -25,13 +25,18 @@ LAGS = (0.02, 0.04, 0.06, 0.08, 0.1)  # s
 MATCH = 0.2 * LAGS[0]  # s: two snapshots lie one lag apart within this, or within half their spacing if less
 
 
-def heights_by_id(path: Path) -> np.ndarray:
-    """The particles' heights [m] of one snapshot, indexed by their id (NaN for ids not in it)."""
-    x, data = read_vtp(path)
-    ids = data["id"].astype(np.int64)
+def indexed_heights(x: np.ndarray, ids: np.ndarray) -> np.ndarray:
+    """The heights [m] of particles at `x` [n, 3] indexed by their `ids` (NaN for ids not among them)."""
+    ids = ids.astype(np.int64)
     z = np.full(int(ids.max()) + 1 if len(ids) else 0, np.nan)
     z[ids] = x[:, 2]
     return z
+
+
+def heights_by_id(path: Path) -> np.ndarray:
+    """The particles' heights [m] of one snapshot file, indexed by their id (`indexed_heights`)."""
+    x, data = read_vtp(path)
+    return indexed_heights(x, data["id"])
 
 
 def mean_square_displacements(snapshots: Iterable[tuple[float, np.ndarray]],
