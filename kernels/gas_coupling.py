@@ -15,7 +15,7 @@ At each gas step (every `coupling_interval` DEM steps):
                   to face f's implicit drag coefficient B_f and K_p w_pf v_p to Bv_f, and with
                   heat H_p w_pc to the cell's H_c and H_p w_pc T_p to HT_c.
                   Layered (m > 1, `gas.voidage = "layered"`): eps_p from the layers
-                  (`layered_voidage`), u_p = sum_f w_pf eps_f u_f / eps_p (the superficial velocity
+                  (`kernels/layered_voidage.py`), u_p = sum_f w_pf eps_f u_f / eps_p (the superficial velocity
                   over the grain's own voidage) and K_p = K(eps_p) s_p, s_p = min(eps_c,p / eps_p, 2)
                   with eps_c,p the cells' voidage at the grain: the gas carries -eps_c grad p, so a
                   grain's whole fluid force is about its drag / eps_c, and s_p makes that its own
@@ -44,9 +44,10 @@ import math
 import taichi as ti
 
 from .drag import make_drag, make_nusselt
-from .gas_grid import layer_grid, make_cic, serial_loops
+from .gas_grid import make_cic, serial_loops
 from .gas_smoothing import Filter, make_filter, make_open_shares
-from .gas_weights import make_gas_weights, make_in_gas, make_self_share, plain_weights
+from .gas_weights import make_gas_weights, make_in_gas, plain_weights
+from .layered_voidage import make_layered_voidage
 from .ordered import in_order
 
 MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check (`tidem.gas.limits`)
@@ -55,7 +56,7 @@ MAX_SCALE = 2.0  # cap of eps_c / eps_p: the margin of the drag-relaxation check
 def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_voidage: float,
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
                           species: bool = False, tracer_dt: float = 0.0,
-                          coarse_grain: bool = False, cut_cells: bool = False, layers: int = 1,
+                          coarse_grain: bool = False, cut_cells: bool = False, layers: int = 1, rows: int = 1,
                           cell_filter: Filter | None = None, layer_filter: Filter | None = None):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
     particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
@@ -73,29 +74,21 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     tubes in the gas) the voidage is taken over each cell's open volume G.open, and the weights over the
     cells and faces the gas flows in (`kernels/gas_weights.py`). With `layers` > 1
     (G.solid_layer allocated) a grain's voidage comes from horizontal layers `layers` times thinner
-    than a gas cell (`layered_voidage`). With `cell_filter` / `layer_filter` (`gas.averaging_length`) the solid
+    than a gas cell (`kernels/layered_voidage.py`; `rows` > 1: a parcel stands in up to `rows` rows of its grains). With `cell_filter` / `layer_filter` (`gas.averaging_length`) the solid
     volume deposited on the cells / layers is filtered to that averaging length before the voidage is taken
     (`kernels/gas_smoothing.py`; G.solid_tmp / G.layer_tmp allocated); the drag and heat keep their CIC weights, so
     the exchange still balances exactly."""
     cic, corner, weight, corners = make_cic(gg)
     layered = layers > 1
-    cell_filtered, layer_filtered = cell_filter is not None, layer_filter is not None
-    lcic = lcorner = lweight = lcorners = lself = cself = inv_lvol = None  # used only when layered
-    if layered:
-        lg = layer_grid(gg, layers)
-        lcic, lcorner, lweight, lcorners = make_cic(lg)
-        inv_lvol = 1.0 / lg.volume
-        lself = make_self_share(lcorner, layer_filter.own if layer_filter else (0.0, 0.0, 0.0))
-        cself = make_self_share(corner, cell_filter.own if cell_filter else (0.0, 0.0, 0.0))
-    share, gweight, gself = plain_weights(weight)
-    lshare = lgweight = lgself = None
+    share, gweight, _ = plain_weights(weight)
     if cut_cells:
-        in_gas, in_gas_layer = make_in_gas(gg, G, layers)
-        share, gweight, gself = make_gas_weights(corner, weight, corners, in_gas)
-        if layered:
-            lshare, lgweight, lgself = make_gas_weights(lcorner, lweight, lcorners, in_gas_layer)
-    elif layered:
-        lshare, lgweight, lgself = plain_weights(lweight)
+        in_gas, _ = make_in_gas(gg, G, layers)
+        share, gweight, _ = make_gas_weights(corner, weight, corners, in_gas)
+    deposit_layers = layered_voidage = None  # used only when layered
+    if layered:
+        deposit_layers, layered_voidage = make_layered_voidage(
+            gg, G, S, layers, rows, cut_cells, min_voidage, cell_filter.own if cell_filter else None,
+            layer_filter.own if layer_filter else None)
     drag_coefficient = make_drag(drag_model, rho, mu)
     nusselt = make_nusselt(nusselt_model, rho, mu, prandtl)
     inv_vol = 1.0 / gg.volume
@@ -176,40 +169,6 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         r = S.radius[i]
         return 4.0 / 3.0 * math.pi * r * r * r
 
-    @ti.func
-    def layered_voidage(x, vp):
-        """The voidage a grain of volume vp at x sees, from the layers (docs/scenes.md, `gas.voidage`): eps_l,
-        the layers' voidage interpolated to x, with the grain's own share moved from the layer
-        scale to the cell scale in proportion to S0(phi) = (1 - phi)^4 / (1 + 2 phi)^2, the Percus-Yevick
-        structure factor at zero wave number of its neighbours' solid fraction phi (a loose suspension, S0 -> 1:
-        a lone grain sees the cell voidage; a packed bed, S0 -> 0: the layer voidage as it is)."""
-        base, frac = lcic(x, -1)
-        s, m = lshare(base, frac, -1)
-        eps_l = 0.0
-        open_l = 0.0
-        for o_t in ti.static(lcorners(-1)):
-            o = ti.Vector(o_t)
-            J = lcorner(base, o, -1)
-            open_vol = 1.0
-            if ti.static(cut_cells):
-                open_vol = G.open_layer[J]
-            w = lgweight(base, frac, o, -1, s, m)
-            eps_l += w * (1.0 - G.solid_layer[J] * inv_lvol / open_vol)
-            open_l += w * open_vol
-        own_l = vp * inv_lvol / open_l * lself(base, frac)
-        if ti.static(not layer_filtered):
-            if m:
-                own_l = vp * inv_lvol / open_l * lgself(base, frac, s)
-        cbase, cfrac = cic(x, -1)
-        cs, cm = share(cbase, cfrac, -1)
-        own_c = vp * inv_vol / open_l * cself(cbase, cfrac)
-        if ti.static(not cell_filtered):  # (filtered: the separable form beside walls too)
-            if cm:
-                own_c = vp * inv_vol / open_l * gself(cbase, cfrac, cs)
-        phi = ti.min(ti.max(1.0 - eps_l - own_l, 0.0), 1.0)
-        s0 = (1.0 - phi) ** 4 / (1.0 + 2.0 * phi) ** 2
-        return ti.min(ti.max(eps_l + s0 * (own_l - own_c), min_voidage), 1.0)
-
     cell_open, layer_open = make_open_shares(G, cut_cells, layers)
     filters = []
     if cell_filter is not None:
@@ -247,11 +206,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                     o = ti.Vector(o_t)
                     G.solid_vol[corner(base, o, -1)] += gweight(base, frac, o, -1, s, m) * vp
                 if ti.static(layered):
-                    base, frac = lcic(S.x[i], -1)
-                    s, m = lshare(base, frac, -1)
-                    for o_t in ti.static(lcorners(-1)):
-                        o = ti.Vector(o_t)
-                        G.solid_layer[lcorner(base, o, -1)] += lgweight(base, frac, o, -1, s, m) * vp
+                    deposit_layers(i, vp)
 
     @ti.kernel
     def set_voidage():
@@ -324,7 +279,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 u = ti.Vector([0.0, 0.0, 0.0])
                 scale = 1.0  # layered: eps_c / eps_p (the grain's whole fluid force at its own voidage)
                 if ti.static(layered):
-                    eps = layered_voidage(x, volume(i))
+                    eps = layered_voidage(i, x, volume(i))
                     u = sample_superficial(x)
                     u /= eps
                     scale = ti.min(sample_cells(G.eps, x) / eps, MAX_SCALE)

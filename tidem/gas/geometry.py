@@ -15,6 +15,7 @@ from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
 from tidem.kernels.gas_smoothing import plan_filter
+from tidem.kernels.layered_voidage import parcel_rows
 from tidem.scene.sizes import AVERAGING_GRAINS, gas_cell_counts, largest_grain
 
 
@@ -201,10 +202,28 @@ def inlet_parts(gg: GasGrid, gas) -> np.ndarray:
 
 
 def voidage_layers(model) -> int:
-    """Horizontal layers per gas cell for the voidage a grain sees (`kernels/gas_coupling.py`): about one
-    particle (parcel) diameter high, the Sauter mean of the scene's particles, at least 1; 1 with
-    `gas.voidage = "cell"`."""
-    return layers_for(model.scene, sauter_diameter(2.0 * model.radius))
+    """Horizontal layers per gas cell for the voidage a grain sees (`kernels/layered_voidage.py`): about one
+    grain high, the Sauter mean of the scene's grains (with `gas.parcel_voidage = "parcel_layers"`, of its particles:
+    one parcel high), at least 1; 1 with `gas.voidage = "cell"`."""
+    if model.scene.gas.parcel_voidage == "parcel_layers":
+        return layers_for(model.scene, sauter_diameter(2.0 * model.radius))
+    return layers_for(model.scene, grain_sauter_diameter(model))
+
+
+def grain_sauter_diameter(model) -> float:
+    """Sauter mean diameter [m] of the scene's grains, sum d^3 / sum d^2 over every grain (a parcel
+    of coarse-graining factor k holds k^3 grains of its diameter / k): the layers' height and the length of the
+    packed-bed tube convection."""
+    k = np.ones_like(model.radius) if model.coarse_grain is None else model.coarse_grain
+    return sauter_diameter(2.0 * model.radius / k, k**3)
+
+
+def parcel_rows_max(model) -> int:
+    """The most rows of its grains a parcel stands in on the layers (`kernels/layered_voidage.py`, eq. (1)): 1 without
+    parcels, layers or with `gas.parcel_voidage = "parcel_layers"`."""
+    if model.coarse_grain is None or model.scene.gas.parcel_voidage == "parcel_layers" or voidage_layers(model) <= 1:
+        return 1
+    return parcel_rows(float(np.max(model.coarse_grain)))
 
 
 def averaging_length(scene) -> float | None:

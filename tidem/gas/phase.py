@@ -20,8 +20,8 @@ import taichi as ti
 
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas.fields import allocate_gas_fields
-from tidem.gas.geometry import (averaging_length, convection_walls, gas_grid, gas_walls, inlet_parts, sauter_diameter,
-                                voidage_filters, voidage_layers)
+from tidem.gas.geometry import (averaging_length, convection_walls, gas_grid, gas_walls, grain_sauter_diameter,
+                                inlet_parts, parcel_rows_max, voidage_filters, voidage_layers)
 from tidem.gas.limits import MAX_COURANT, inlet_velocities
 from tidem.gas.open_volume import open_volumes
 from tidem.gas.probes import probe_pressures
@@ -39,14 +39,6 @@ from tidem.scene.schedule import is_scheduled, start, value_at
 
 class GasError(RuntimeError):
     """The gas step cannot go on stably; the message names the setting to change."""
-
-
-def grain_sauter_diameter(model) -> float:
-    """Sauter mean diameter [m] of the scene's grains, sum d^3 / sum d^2 over every grain (a parcel
-    of coarse-graining factor k holds k^3 grains of its diameter / k): the length of the packed-bed
-    tube convection."""
-    k = np.ones_like(model.radius) if model.coarse_grain is None else model.coarse_grain
-    return sauter_diameter(2.0 * model.radius / k, k**3)
 
 
 class GasPhase:
@@ -108,7 +100,7 @@ class GasPhase:
             gg, G, S, DRAG_IDS[gas.drag], gas.density, gas.viscosity, gas.min_voidage, self.heat,
             NUSSELT_IDS[gas.heat_transfer], gas.heat_capacity * gas.viscosity / k_gas, k_gas, self.species,
             model.dt if self.sources else 0.0, model.features.coarse_grain, self.open is not None,
-            self.layers, *self.filters)
+            self.layers, parcel_rows_max(model), *self.filters)
         if self.species:
             ox = gas.oxygen
             self._species = make_species_kernel(gg, G, self.flow, gas.density, ox.diffusivity)

@@ -5,7 +5,7 @@ run)."""
 
 import math
 
-from tidem.gas.geometry import averaging_length, convection_walls, gas_grid, voidage_layers
+from tidem.gas.geometry import averaging_length, convection_walls, gas_grid, parcel_rows_max, voidage_layers
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_smoothing import plan_filter
 from tidem.particles.contact_params import kinetic_theory_restitution
@@ -83,6 +83,8 @@ def gas_line(model) -> str:
     gas = model.scene.gas
     gg = gas_grid(model.scene)
     layers = voidage_layers(model)
+    n = parcel_rows_max(model)
+    rows = f" (one grain high; a parcel in up to {n} rows of its grains, gas.parcel_voidage)" if n > 1 else ""
     width = band_width(gg, cpu=True)
     cg = f"Jacobi-preconditioned CG (tolerance {gas.tolerance:g}, at most {gas.max_iterations} iterations)"
     solve = (f"directly on the CPU (banded Cholesky, half-bandwidth {width} cells), by {cg} on a GPU" if width else f"by {cg}")
@@ -95,5 +97,5 @@ def gas_line(model) -> str:
     else:
         averaged = f"averaged over {length:g} m ({key})"
     return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
-            f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + f", {averaged}; "
+            f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + rows + f", {averaged}; "
             f"pressure solved {solve}")

@@ -51,6 +51,7 @@ class Gas(Strict):
     initial_temperature: Positive | None = None
     drag: Literal["gidaspow", "di_felice", "beetstra", "tang"] = "gidaspow"
     voidage: Literal["layered", "cell"] = "layered"
+    parcel_voidage: Literal["grain_layers", "parcel_layers"] = "grain_layers"
     averaging_length: Positive | Literal["cells"] | None = None
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"

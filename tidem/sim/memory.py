@@ -208,7 +208,9 @@ def scene_items(scene) -> list[Item]:
                       "use a smaller domain"))
     if scene.gas is not None:
         cells = math.prod(gas_cell_counts(scene))
-        layers = layers_for(scene, dmin)
+        grains = scene.gas.parcel_voidage == "grain_layers"  # layers one grain high, else one parcel high
+        layers = layers_for(scene, min((1 if grains else g.coarse_grain) * _smallest_diameter(g.diameter)
+                                       for g in scene.particles))
         items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * (gas_cell_bytes(feat, layers)
                           + GAS_HOST_BYTES_PER_CELL), "gas.cell_size", "use larger gas cells or a smaller domain"))
     if scene.averaging is not None:
