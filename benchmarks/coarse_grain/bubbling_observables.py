@@ -1,6 +1,7 @@
 """The observables of a developed bubbling bed, per run, over a window (issue's coarse-graining list).
 
     python benchmarks/coarse_grain/bubbling_observables.py T_START RUN_DIR[=LABEL] ... [--csv OUT.csv] [--plot OUT.png]
+    python benchmarks/coarse_grain/bubbling_observables.py - RUNS.csv ... [--groups G1,G2,...] [--plot OUT.png]
 
 For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 0.02 s or so:
 `--set output.interval=0.02`), over the window from T_START to the run's end:
@@ -19,6 +20,8 @@ For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 
 Prints one Markdown row per run; `--csv` also writes them. Then, grouping runs whose labels differ only in
 a trailing `_sN` (seeds), one row per group: the mean over its seeds, their range, and the mean's deviation
 from the first group's mean; `--plot` draws those deviations as bars with the seeds' range (5 % shaded).
+The second form takes the rows of earlier `--csv` files instead of run folders; `--groups` keeps those groups,
+in that order (the first is the reference).
 """
 
 from __future__ import annotations
@@ -167,14 +170,25 @@ def main(argv: list[str]) -> None:
         i = argv.index("--plot")
         figure = Path(argv[i + 1])
         argv = argv[:i] + argv[i + 2:]
-    t_start = float(argv[0])
+    keep = None
+    if "--groups" in argv:
+        i = argv.index("--groups")
+        keep = argv[i + 1].split(",")
+        argv = argv[:i] + argv[i + 2:]
     print("| run | " + " | ".join(COLUMNS) + " |\n|" + "---|" * (len(COLUMNS) + 1))
     rows = []
     for spec in argv[1:]:
+        if argv[0] == "-":
+            with open(spec, newline="") as f:
+                rows += [{"run": r["run"], **{c: float(r[c]) for c in COLUMNS}} for r in csv.DictReader(f)]
+            continue
         path, _, label = spec.partition("=")
-        obs = observe(Path(path), t_start)
+        obs = observe(Path(path), float(argv[0]))
         rows.append({"run": label or path, **obs})
         print(f"| {label or path} | " + " | ".join(f"{obs[c]:.4g}" for c in COLUMNS) + " |", flush=True)
+    if keep is not None:
+        groups = seed_groups(rows)
+        rows = [r for g in keep for r in groups[g]]
     print_groups(rows)
     if figure is not None:
         plot_groups(rows, figure)
