@@ -45,10 +45,10 @@ def test_a_parcels_volume_stands_on_grain_high_layers_in_rows_of_the_spheres_sli
 
 def test_a_lone_parcel_in_rows_sees_the_cell_voidage(solver_for):
     """Alone in its cells (S0 = 1) a parcel reads its own volume at the cell scale: its rows' voidage less its own
-    share of eq. (2) is 1, so it sees what gas.voidage = "cell" gives, to round-off, at any height: by the bottom
-    wall, its rows on layers' centres, between two; three parcels over two cells apart, over the cells' own
-    averaging."""
-    lone = [[0.0031, 0.0047, 0.0017], [0.0031, 0.0047, 0.0205], [0.0089, 0.0023, 0.0401]]
+    share of eq. (2) is 1, so it sees what gas.voidage = "cell" gives, to round-off, at any height: on the floor
+    (its lowest row below the first layer's centre, where the weights fold back), its rows on layers' centres,
+    between two; three parcels over two cells apart, over the cells' own averaging."""
+    lone = [[0.0031, 0.0047, 0.00145], [0.0031, 0.0047, 0.0205], [0.0089, 0.0023, 0.0401]]
     seen = {}
     for voidage in ("cell", "layered"):
         raw = parcels(lone)
