@@ -21,7 +21,7 @@ Prints one Markdown row per run; `--csv` also writes them. Then, grouping runs w
 a trailing `_sN` (seeds), one row per group: the mean over its seeds, their range, and the mean's deviation
 from the first group's mean; `--plot` draws those deviations as bars with the seeds' range (5 % shaded).
 The second form takes the rows of earlier `--csv` files instead of run folders; `--groups` keeps those groups,
-in that order (the first is the reference).
+in that order (the first is the reference), G1+G2 pooling two groups' runs as one.
 """
 
 from __future__ import annotations
@@ -186,9 +186,10 @@ def main(argv: list[str]) -> None:
         obs = observe(Path(path), float(argv[0]))
         rows.append({"run": label or path, **obs})
         print(f"| {label or path} | " + " | ".join(f"{obs[c]:.4g}" for c in COLUMNS) + " |", flush=True)
-    if keep is not None:
+    if keep is not None:  # each kept group, "A+B" pooling groups A and B under that name
         groups = seed_groups(rows)
-        rows = [r for g in keep for r in groups[g]]
+        rows = [{**r, "run": f"{name}_s{i + 1}"} for name in keep
+                for i, r in enumerate(r for g in name.split("+") for r in groups[g])]
     print_groups(rows)
     if figure is not None:
         plot_groups(rows, figure)
