@@ -74,7 +74,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     tubes in the gas) the voidage is taken over each cell's open volume G.open, and the weights over the
     cells and faces the gas flows in (`kernels/gas_weights.py`). With `layers` > 1
     (G.solid_layer allocated) a grain's voidage comes from horizontal layers `layers` times thinner
-    than a gas cell (`kernels/layered_voidage.py`; `rows` > 1: a parcel stands in up to `rows` rows of its grains). With `cell_filter` / `layer_filter` (`gas.averaging_length`) the solid
+    than a gas cell (`kernels/layered_voidage.py`; `rows` > 1: a parcel stands in up to `rows` rows of its
+    grains). With `cell_filter` / `layer_filter` (`gas.averaging_length`) the solid
     volume deposited on the cells / layers is filtered to that averaging length before the voidage is taken
     (`kernels/gas_smoothing.py`; G.solid_tmp / G.layer_tmp allocated); the drag and heat keep their CIC weights, so
     the exchange still balances exactly."""

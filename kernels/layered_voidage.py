@@ -32,9 +32,9 @@ def parcel_rows(k: float) -> int:
 
 
 def make_layered_voidage(gg, G, S, layers: int, rows: int, cut_cells: bool, min_voidage: float,
-                         cell_own=(0.0, 0.0, 0.0), layer_own=None):
-    """Return (deposit_layers(i, vp), layered_voidage(i, vp)), Taichi funcs for particle i of volume vp: add its
-    volume to G.solid_layer; the voidage it sees. `rows` > 1 (parcels, S.cg allocated): the most rows of eq. (1) of
+                         cell_own=None, layer_own=None):
+    """Return (deposit_layers(i, vp), layered_voidage(i, x, vp)), Taichi funcs for particle i of volume vp at x: add
+    its volume to G.solid_layer; the voidage it sees. `rows` > 1 (parcels, S.cg allocated): the most rows of eq. (1) of
     any parcel; 1: every particle one CIC point. `cell_own` / `layer_own`: the averaging-length filters' own shares
     (`gas_smoothing.Filter.own`), None for an unfiltered lattice."""
     cic, corner, weight, corners = make_cic(gg)
