@@ -44,6 +44,7 @@ import math
 import taichi as ti
 
 from .drag import make_drag, make_nusselt
+from .exchange_filter import make_exchange_filter
 from .gas_grid import make_cic, serial_loops
 from .gas_smoothing import Filter, make_filter, make_open_shares
 from .gas_weights import make_gas_weights, make_in_gas, plain_weights
@@ -57,7 +58,8 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                           heat: bool = False, nusselt_model: int = 0, prandtl: float = 0.7, k_gas: float = 0.026,
                           species: bool = False, tracer_dt: float = 0.0,
                           coarse_grain: bool = False, cut_cells: bool = False, layers: int = 1, rows: int = 1,
-                          cell_filter: Filter | None = None, layer_filter: Filter | None = None):
+                          cell_filter: Filter | None = None, layer_filter: Filter | None = None,
+                          exchange_filter: Filter | None = None):
     """Return (deposit_volume(n), couple(n), sample(n), add_gas_forces(n), gas_force(i, t)) for
     particles S and gas G (gas_force: add_gas_forces for one particle, a Taichi func);
     with `species`, `sample` also gives each particle the O2 mass fraction of the gas, gY. With
@@ -77,8 +79,10 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
     than a gas cell (`kernels/layered_voidage.py`; `rows` > 1: a parcel stands in up to `rows` rows of its
     grains). With `cell_filter` / `layer_filter` (`gas.averaging_length`) the solid
     volume deposited on the cells / layers is filtered to that averaging length before the voidage is taken
-    (`kernels/gas_smoothing.py`; G.solid_tmp / G.layer_tmp allocated); the drag and heat keep their CIC weights, so
-    the exchange still balances exactly."""
+    (`kernels/gas_smoothing.py`; G.solid_tmp / G.layer_tmp allocated). With `exchange_filter` (`gas.drag_averaging =
+    "length"`) the drag deposited on the faces is spread by that filter and the gas velocity the particles read is
+    taken through its transpose (`kernels/exchange_filter.py`; G.uf, G.face_tmp, G.face_tmp2 allocated); otherwise
+    the drag keeps its CIC weights. Either way the exchange balances exactly; the heat keeps its CIC weights."""
     cic, corner, weight, corners = make_cic(gg)
     layered = layers > 1
     share, gweight, _ = plain_weights(weight)
@@ -122,17 +126,23 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         zero = ti.Vector([0, 0, 0])
         return 0.5 * (G.eps[corner(below, zero, -1)] + G.eps[corner(J, zero, -1)])
 
+    filtered = exchange_filter is not None
+    VEL = G.uf if filtered else U  # the gas velocity the particles read (filtered: u~ of eq. (4), layered: eps u)
+
     @ti.func
     def sample_superficial(x):
-        """eps_f u_f interpolated to x, per component (the superficial velocity)."""
+        """eps_f u_f interpolated to x, per component (the superficial velocity; filtered: G.uf holds it)."""
         out = ti.Vector([0.0, 0.0, 0.0])
-        for c in ti.static(range(3)):
-            base, frac = cic(x, c)
-            s, m = share(base, frac, c)
-            for o_t in ti.static(corners(c)):
-                o = ti.Vector(o_t)
-                J = corner(base, o, c)
-                out[c] += gweight(base, frac, o, c, s, m) * face_voidage(J, c) * U[c][J]
+        if ti.static(filtered):
+            out = sample_faces(VEL, x)
+        else:
+            for c in ti.static(range(3)):
+                base, frac = cic(x, c)
+                s, m = share(base, frac, c)
+                for o_t in ti.static(corners(c)):
+                    o = ti.Vector(o_t)
+                    J = corner(base, o, c)
+                    out[c] += gweight(base, frac, o, c, s, m) * face_voidage(J, c) * U[c][J]
         return out
 
     @ti.func
@@ -232,7 +242,9 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 o = ti.Vector(o_t)
                 wk = gweight(base, frac, o, c, s, m) * k
                 J = corner(base, o, c)
-                if ti.static(layered):
+                if ti.static(layered and filtered):
+                    B[c][J] += wk / S.geps[i]  # times eps_f after the filter (eq. (3) of `kernels/exchange_filter.py`)
+                elif ti.static(layered):
                     B[c][J] += wk * face_voidage(J, c) / S.geps[i]
                 else:
                     B[c][J] += wk
@@ -286,7 +298,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                     scale = ti.min(sample_cells(G.eps, x) / eps, MAX_SCALE)
                 else:
                     eps = sample_cells(G.eps, x)
-                    u = sample_faces(U, x)
+                    u = sample_faces(VEL, x)
                 d = 2.0 * S.radius[i]
                 grains = 1.0  # grains per parcel
                 if ti.static(coarse_grain):
@@ -326,7 +338,7 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
                 if ti.static(layered):
                     S.gu[i] = sample_superficial(x) / S.geps[i]
                 else:
-                    S.gu[i] = sample_faces(U, x)
+                    S.gu[i] = sample_faces(VEL, x)
                 S.ggp[i] = sample_faces(GP, x)
                 if ti.static(heat):
                     S.gT[i] = sample_temperature(x)
@@ -346,5 +358,21 @@ def make_coupling_kernels(gg, G, S, drag_model: int, rho: float, mu: float, min_
         for i in range(n):
             if S.active[i]:
                 gas_force(i, 0.0)
+
+    if filtered:
+        read_velocity, spread_drag = make_exchange_filter(exchange_filter, gg, G, layered, cut_cells, serial,
+                                                          face_voidage)
+        couple_kernel, sample_kernel = couple, sample
+
+        def couple(n: int) -> float:
+            """`couple` with the velocity read through the filter and the drag spread by it (eqs. (3)-(4))."""
+            read_velocity()
+            rate = couple_kernel(n)
+            spread_drag()
+            return rate
+
+        def sample(n: int):
+            read_velocity()
+            sample_kernel(n)
 
     return deposit_volume, couple, sample, add_gas_forces, gas_force

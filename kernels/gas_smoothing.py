@@ -55,35 +55,48 @@ def plan_filter(h, cells, length: float | None, axes=(0, 1, 2)) -> Filter | None
     return Filter(steps, tuple(t / steps for t in total), tuple(own))
 
 
+def make_step_at(plan: Filter, shape, periodic, open_share):
+    """Return step_at(src, dst, I): one step of eq. (2) at lattice point I of a lattice of `shape`, from field src
+    into dst (a Taichi func); open_share(I) is f of point I (a Taichi func). A point with f = 0 keeps its value and
+    takes no part in its neighbours' steps."""
+    lam = plan.lam
+
+    @ti.func
+    def step_at(src: ti.template(), dst: ti.template(), I):
+        fi = open_share(I)
+        out = src[I]
+        if fi > 0.0:
+            phi = src[I] / fi
+            for a in ti.static(range(3)):
+                if ti.static(lam[a] > 0.0):
+                    for side in ti.static((-1, 1)):
+                        J = I
+                        J[a] += side
+                        inside = True
+                        if ti.static(periodic[a]):
+                            J[a] = (J[a] + shape[a]) % shape[a]
+                        else:
+                            inside = 0 <= J[a] < shape[a]
+                        if inside:
+                            fj = open_share(J)
+                            if fj > 0.0:
+                                out += lam[a] * ti.min(fi, fj) * (src[J] / fj - phi)
+        dst[I] = out
+
+    return step_at
+
+
 def make_filter(plan: Filter, shape, periodic, vol, tmp, open_share, serial: bool):
     """Return apply(): `plan.steps` steps of eq. (2) on field `vol` (solid volume per lattice point, `shape`),
     through the scratch field `tmp`; open_share(I) is f of point I (a Taichi func)."""
-    lam = plan.lam
+    step_at = make_step_at(plan, shape, periodic, open_share)
 
     @ti.kernel
     def step(src: ti.template(), dst: ti.template()):
         if ti.static(serial):
             ti.loop_config(serialize=True)
         for I in ti.grouped(ti.ndrange(*shape)):
-            fi = open_share(I)
-            out = src[I]
-            if fi > 0.0:
-                phi = src[I] / fi
-                for a in ti.static(range(3)):
-                    if ti.static(lam[a] > 0.0):
-                        for side in ti.static((-1, 1)):
-                            J = I
-                            J[a] += side
-                            inside = True
-                            if ti.static(periodic[a]):
-                                J[a] = (J[a] + shape[a]) % shape[a]
-                            else:
-                                inside = 0 <= J[a] < shape[a]
-                            if inside:
-                                fj = open_share(J)
-                                if fj > 0.0:
-                                    out += lam[a] * ti.min(fi, fj) * (src[J] / fj - phi)
-            dst[I] = out
+            step_at(src, dst, I)
 
     def apply():
         for _ in range(plan.steps // 2):

@@ -205,12 +205,15 @@ def test_fixed_particle_heats_as_lumped_solution(solver_for, model, nusselt):
     assert s.state.T.to_numpy()[0] - t_p == pytest.approx(expected - t_p, rel=0.01)
 
 
-@pytest.mark.parametrize("averaging_length", ["cells", None])
-def test_drag_on_the_gas_balances_the_drag_on_the_particles(solver_for, averaging_length):
-    """Over the cells' own averaging and with the voidage filtered to the default averaging length, 12 d
-    (`kernels/gas_smoothing.py`): the drag keeps its cloud-in-cell weights."""
-    raw = fluid_bed(0.8)
+@pytest.mark.parametrize("averaging_length, drag_averaging, voidage", [
+    ("cells", "cells", "layered"), (None, "cells", "layered"), (None, "length", "layered"), (None, "length", "cell")])
+def test_drag_on_the_gas_balances_the_drag_on_the_particles(solver_for, averaging_length, drag_averaging, voidage):
+    """Over the cells' own averaging, with the voidage filtered to the default averaging length, 12 d
+    (`kernels/gas_smoothing.py`; the drag on its cloud-in-cell weights), and with the drag spread over that length
+    and the gas velocity read through the transposed filter (`kernels/exchange_filter.py`, eqs. (3)-(4))."""
+    raw = fluid_bed(0.8, voidage=voidage)
     raw["gas"]["averaging_length"] = averaging_length
+    raw["gas"]["drag_averaging"] = drag_averaging
     s = solver_for(raw)
     for _ in range(400):
         s.step()

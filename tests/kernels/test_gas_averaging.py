@@ -43,7 +43,7 @@ def test_the_filter_keeps_the_solid_volume_beside_a_tube(solver_for):
     x = lattice_bed(hole=(0.015, 0.03, 0.0046))
     s = solver_for(fixed_grains(x, 0.003, length=0.012, tube=True))
     s.step()
-    assert all(f is not None for f in s.gas.filters)
+    assert all(f is not None for f in s.gas.filters[:2])
     grains = len(x) * np.pi / 6 * D**3
     assert s.gas.G.solid_vol.to_numpy().sum() == pytest.approx(grains, rel=1e-12)
     assert s.gas.G.solid_layer.to_numpy().sum() == pytest.approx(grains, rel=1e-12)
@@ -101,7 +101,7 @@ def test_the_voidage_a_grain_sees_hangs_less_on_the_cell(solver_for):
 
 def test_cells_average_alone_over_the_cells_own_reach(solver_for):
     s = solver_for(fixed_grains([[0.015, 0.002, 0.02]], 0.003, "cells"))
-    assert s.gas.filters == (None, None)
+    assert s.gas.filters == (None, None, None)
 
 
 def test_the_default_length_is_twelve_diameters_of_the_largest_grain():
@@ -120,3 +120,45 @@ def test_the_default_length_is_twelve_diameters_of_the_largest_grain():
     assert averaging_length(validate(raw).scene) is None
     raw["gas"]["averaging_length"] = 0.02
     assert averaging_length(validate(raw).scene) == 0.02
+
+
+@pytest.mark.parametrize("voidage", ["layered", "cell"])
+def test_the_filtered_drag_balances_beside_a_tube(solver_for, voidage):
+    """`gas.drag_averaging = "length"` beside a tube, whose cut faces carry open shares below 1: the drag the gas
+    feels, sum_f B_f u_f - Bv_f, is minus the grains' (eqs. (3)-(4) of `kernels/exchange_filter.py`: the read
+    through D^-1 A D is the deposit's transpose only with the open shares in D)."""
+    x = lattice_bed(hole=(0.015, 0.03, 0.0046))
+    raw = fixed_grains(x, 0.003, length=0.012, voidage=voidage, tube=True)
+    raw["gas"]["drag_averaging"] = "length"
+    s = solver_for(raw)
+    for _ in range(3):
+        s.step()
+    S, G = s.state, s.gas.G
+    assert s.gas.filters[2] is not None
+    open_face = G.open_face[2].to_numpy()
+    assert ((open_face > 0.05) & (open_face < 0.95)).any(), "faces cut by the tube"
+    on_particles = (S.gK.to_numpy()[:, None] * (S.gu.to_numpy() - S.v.to_numpy())).sum(axis=0)
+    on_gas = np.array([(G.B[c].to_numpy() * G.u[c].to_numpy() - G.Bv[c].to_numpy()).sum() for c in range(3)])
+    assert abs(on_particles[2]) > 1e-5, "the grains hold the gas back"
+    assert on_gas == pytest.approx(on_particles, rel=1e-9, abs=1e-14)
+
+
+def test_one_grains_drag_spreads_to_the_variance_of_the_averaging_length(solver_for):
+    """`gas.drag_averaging = "length"`: a grain's drag coefficient on the vertical faces, B_z, has the CIC deposit's
+    variance f (1 - f) h^2 plus 2 tau = L^2 / 12 - h^2 / 3 along each axis (eq. (3) of `kernels/exchange_filter.py`,
+    eq. (1) of `kernels/gas_smoothing.py`), and its total is the grain's K_p."""
+    h, length = 0.003, 0.015
+    x = np.array([[0.0292, 0.002, 0.0296]])
+    raw = fixed_grains(x, h, length=length, voidage="cell", box=(0.06, 0.004, 0.06))
+    raw["gas"]["drag_averaging"] = "length"
+    s = solver_for(raw)
+    s.step()
+    b = s.gas.G.B[2].to_numpy()
+    assert b.sum() == pytest.approx(s.state.gK.to_numpy()[0], rel=1e-12)
+    gg = s.gas.gg
+    for a in (0, 2):
+        points = gg.lo[a] + (np.arange(b.shape[a]) + (0.0 if a == 2 else 0.5)) * gg.h[a]
+        w = b.sum(axis=tuple(c for c in range(3) if c != a)) / b.sum()
+        f = (x[0, a] - points[0]) / gg.h[a] % 1.0
+        variance = (w * (points - x[0, a]) ** 2).sum()
+        assert variance == pytest.approx(f * (1 - f) * gg.h[a] ** 2 + length**2 / 12 - gg.h[a] ** 2 / 3, rel=1e-9)

@@ -35,7 +35,7 @@ from tidem.kernels.gas_grid import GasGrid
 def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarray], walls: dict | None,
                         n_walls: int, heat: bool, sources: bool, species: bool,
                         open_volumes: dict[str, np.ndarray] | None = None, layers: int = 1, band: int = 0,
-                        cut=None, filters: tuple[bool, bool] = (False, False)):
+                        cut=None, filters: tuple[bool, bool, bool] = (False, False, False)):
     """Place the fields a scene's gas needs and fill the fixed ones (solid cells, face kinds,
     tube walls) and the starting voidage 1; returns (namespace of fields, SNode tree). With `layers` > 1,
     solid_layer: the solid volume on cells cut into that many horizontal layers (`kernels/gas_coupling.py`). With
@@ -43,8 +43,9 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
     cell (open), face (open_face) and layer (open_layer). With
     `band` = w > 0, band (cells x w + 1) and band_y (cells) for the direct pressure solve (`kernels/gas_band.py`).
     With `cut` (the meshes' `tidem.gas.mesh.GasCut`) part (each cell's gas part's share of its volume) and
-    aperture (each face's open share, `tidem.gas.apertures`). With `filters` (cells, layers) filtered to
-    `gas.averaging_length`, the scratch fields solid_tmp and layer_tmp (`kernels/gas_smoothing.py`)."""
+    aperture (each face's open share, `tidem.gas.apertures`). With `filters` (cells, layers, the drag's exchange)
+    filtered to `gas.averaging_length`, the scratch fields solid_tmp and layer_tmp (`kernels/gas_smoothing.py`) and
+    per face uf, face_tmp and face_tmp2 (`kernels/exchange_filter.py`)."""
     G = SimpleNamespace()
     fb = ti.FieldsBuilder()
     cell_names = ["eps", "eps_old", "solid_vol", "p", "rhs", "diag", "cg_r", "cg_d", "cg_q"]
@@ -85,6 +86,12 @@ def allocate_gas_fields(gg: GasGrid, fp, solid: np.ndarray, kinds: list[np.ndarr
         for c in range(3):
             fb.dense(ti.ijk, gg.face_shape(c)).place(comps[c])
         setattr(G, name, comps)
+    if filters[2]:
+        for name in ("uf", "face_tmp", "face_tmp2"):
+            comps = [ti.field(fp) for _ in range(3)]
+            for c in range(3):
+                fb.dense(ti.ijk, gg.face_shape(c)).place(comps[c])
+            setattr(G, name, comps)
     if open_volumes is not None:
         G.open_face = [ti.field(fp) for _ in range(3)]
         for c in range(3):

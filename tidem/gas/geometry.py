@@ -235,13 +235,16 @@ def averaging_length(scene) -> float | None:
     return length if length is not None else AVERAGING_GRAINS * largest_grain(scene)
 
 
-def voidage_filters(gg, length: float | None, layers: int):
-    """The averaging-length filters (`kernels/gas_smoothing.py`) of the cells' solid volume and, with the layered
-    voidage, of the layers' (across only: a layer keeps its height of about one grain); None where none is needed."""
+def voidage_filters(gg, length: float | None, layers: int, drag: bool = False):
+    """The averaging-length filters (`kernels/gas_smoothing.py`) of the cells' solid volume, with the layered
+    voidage of the layers' (across only: a layer keeps its height of about one grain), and with `drag`
+    (`gas.drag_averaging = "length"`) of the drag's exchange on the faces (`kernels/exchange_filter.py`: the cells'
+    filter, the faces having the cells' spacing); None where none is needed."""
     cells = plan_filter(gg.h, gg.cells, length)
+    exchange = cells if drag else None
     if layers <= 1:
-        return cells, None
-    return cells, plan_filter(gg.h, (gg.cells[0], gg.cells[1], gg.cells[2] * layers), length, axes=(0, 1))
+        return cells, None, exchange
+    return cells, plan_filter(gg.h, (gg.cells[0], gg.cells[1], gg.cells[2] * layers), length, axes=(0, 1)), exchange
 
 
 def sauter_diameter(d: np.ndarray, count: np.ndarray | float = 1.0) -> float:

@@ -69,7 +69,7 @@ class GasPhase:
         self._wall_T = (walls["wall_T"].copy(), walls["wall_k"], walls["wall_A"] > 0.0) if self.walls else None
         self.layers = voidage_layers(model)
         self.open = open_volumes(gg, self.solid, self.kinds, model.tubes, self.cut, self.layers)
-        self.filters = voidage_filters(gg, averaging_length(scene), self.layers)
+        self.filters = voidage_filters(gg, averaging_length(scene), self.layers, gas.drag_averaging == "length")
         self.band = band_width(gg)  # > 0: the pressure solved directly (`kernels/gas_band.py`)
         n_walls = len(model.tubes) + (len(model.meshes) if self.heated_meshes else 0)  # wall_k of mesh k: tubes + k
         self.G, self._tree = allocate_gas_fields(gg, fp, self.solid, self.kinds, walls, n_walls, self.heat,

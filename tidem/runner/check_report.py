@@ -95,7 +95,9 @@ def gas_line(model) -> str:
     elif plan_filter(gg.h, gg.cells, length) is None:
         averaged = f"averaged over two cells, already longer than the averaging length {length:g} m ({key})"
     else:
-        averaged = f"averaged over {length:g} m ({key})"
+        drag = "; the drag and the gas velocity a grain reads too (gas.drag_averaging)" \
+            if gas.drag_averaging == "length" else ""
+        averaged = f"averaged over {length:g} m ({key}){drag}"
     return (f"gas: {'x'.join(map(str, gg.cells))} cells of {' x '.join(f'{h:.3g}' for h in gg.h)} m; voidage a grain "
             f"sees: {gas.voidage}" + (f", {layers} layers a cell" if layers > 1 else "") + rows + f", {averaged}; "
             f"pressure solved {solve}")

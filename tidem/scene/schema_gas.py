@@ -53,6 +53,7 @@ class Gas(Strict):
     voidage: Literal["layered", "cell"] = "layered"
     parcel_voidage: Literal["grain_layers", "parcel_layers"] = "grain_layers"
     averaging_length: Positive | Literal["cells"] | None = None
+    drag_averaging: Literal["cells", "length"] = "cells"
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"
     conduction: StrictBool = True
