@@ -1,7 +1,10 @@
-"""What the averaging-length filter costs: fluidized_tube with and without `gas.averaging_length`, run alternately
-in separate processes, and the ratio of their stepping wall times (run.json `wall_s`, set-up excluded).
+"""What the averaging-length filters cost: fluidized_tube over the cells' own averaging ("cells"), with the voidage
+filtered to `gas.averaging_length` ("filtered") and with the drag's exchange filtered too (`gas.drag_averaging =
+"length"`, "drag"), run alternately in separate processes, and the ratios of their stepping wall times (run.json
+`wall_s`, set-up excluded) to the first variant's.
 
     python benchmarks/grid_independence/filter_cost.py [--cell 0.003] [--length 0.012] [--t-end 0.3] [--rounds 2]
+        [--variants cells,filtered]
 """
 
 import argparse
@@ -11,12 +14,15 @@ import sys
 import tempfile
 from pathlib import Path
 
+VARIANTS = {"cells": {"gas.averaging_length": "cells"}, "filtered": {},
+            "drag": {"gas.drag_averaging": "length"}}  # each variant's keys over the length's
 
-def one_run(cell: float, length: float | None, t_end: float, folder: Path) -> float:
+
+def one_run(cell: float, length: float, variant: str, t_end: float, folder: Path) -> float:
     cmd = [sys.executable, "-m", "tidem", "scene", "fluidized_tube", "--t-end", str(t_end), "--no-render", "--quiet",
            "--out", str(folder), "--set", f"gas.cell_size={cell}", "--set", "gas.coupling_interval=10"]
-    if length is not None:
-        cmd += ["--set", f"gas.averaging_length={length}"]
+    for key, value in {"gas.averaging_length": length, **VARIANTS[variant]}.items():
+        cmd += ["--set", f"{key}={value}"]
     subprocess.run(cmd, check=True)
     return json.loads((folder / "run.json").read_text())["wall_s"]
 
@@ -27,16 +33,21 @@ def main() -> None:
     ap.add_argument("--length", type=float, default=0.012)
     ap.add_argument("--t-end", type=float, default=0.3)
     ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--variants", default="cells,filtered", help=f"comma-separated, of {', '.join(VARIANTS)}")
     args = ap.parse_args()
-    times: dict[str, list[float]] = {"cells": [], "filtered": []}
+    names = args.variants.split(",")
+    if unknown := [n for n in names if n not in VARIANTS]:
+        sys.exit(f"--variants: unknown {', '.join(unknown)} (known: {', '.join(VARIANTS)})")
+    times: dict[str, list[float]] = {name: [] for name in names}
     with tempfile.TemporaryDirectory() as tmp:
         for r in range(args.rounds):
-            for name, length in (("cells", None), ("filtered", args.length)):
-                times[name].append(one_run(args.cell, length, args.t_end, Path(tmp) / f"{name}{r}"))
+            for name in names:
+                times[name].append(one_run(args.cell, args.length, name, args.t_end, Path(tmp) / f"{name}{r}"))
                 print(f"round {r + 1} {name}: {times[name][-1]:.1f} s", flush=True)
-    ratio = sum(times["filtered"]) / sum(times["cells"])
-    print(f"fluidized_tube, {1e3 * args.cell:g} mm cells, {args.t_end:g} s: averaging_length {args.length:g} m takes "
-          f"{ratio:.3f}x the stepping wall time of the cells' own averaging ({args.rounds} alternating rounds)")
+    for name in names[1:]:
+        ratio = sum(times[name]) / sum(times[names[0]])
+        print(f"fluidized_tube, {1e3 * args.cell:g} mm cells, {args.t_end:g} s, L = {args.length:g} m: {name} takes "
+              f"{ratio:.3f}x the stepping wall time of {names[0]} ({args.rounds} alternating rounds)")
 
 
 if __name__ == "__main__":
