@@ -48,29 +48,22 @@ def make_exchange_filter(plan: Filter, gg, G, layered: bool, open_faces: bool, s
     shares = [open_share(c) for c in range(3)]
     steps = [make_step_at(plan, faces[c], gg.periodic, shares[c]) for c in range(3)]
 
-    @ti.kernel
-    def drag_step(forward: ti.template()):
-        for c in ti.static(range(3)):
-            if ti.static(serial):
-                ti.loop_config(serialize=True)
-            for I in ti.grouped(ti.ndrange(*faces[c])):
-                if ti.static(forward):
-                    ti.static(steps[c])(B[c], T1[c], I)
-                    ti.static(steps[c])(BV[c], T2[c], I)
-                else:
-                    ti.static(steps[c])(T1[c], B[c], I)
-                    ti.static(steps[c])(T2[c], BV[c], I)
+    def sweep(pairs):
+        """A kernel of one step of eq. (2) on every face lattice, from each pair's source field into its target."""
 
-    @ti.kernel
-    def velocity_step(forward: ti.template()):
-        for c in ti.static(range(3)):
-            if ti.static(serial):
-                ti.loop_config(serialize=True)
-            for I in ti.grouped(ti.ndrange(*faces[c])):
-                if ti.static(forward):
-                    ti.static(steps[c])(UF[c], T1[c], I)
-                else:
-                    ti.static(steps[c])(T1[c], UF[c], I)
+        @ti.kernel
+        def step():
+            for c in ti.static(range(3)):
+                if ti.static(serial):
+                    ti.loop_config(serialize=True)
+                for I in ti.grouped(ti.ndrange(*faces[c])):
+                    for k in ti.static(range(len(pairs))):
+                        ti.static(steps[c])(ti.static(pairs[k][0][c]), ti.static(pairs[k][1][c]), I)
+
+        return step
+
+    drag_there, drag_back = sweep([(B, T1), (BV, T2)]), sweep([(T1, B), (T2, BV)])
+    velocity_there, velocity_back = sweep([(UF, T1)]), sweep([(T1, UF)])
 
     @ti.kernel
     def weigh_velocity():
@@ -106,14 +99,14 @@ def make_exchange_filter(plan: Filter, gg, G, layered: bool, open_faces: bool, s
     def read_velocity():
         weigh_velocity()
         for _ in range(plan.steps // 2):
-            velocity_step(True)
-            velocity_step(False)
+            velocity_there()
+            velocity_back()
         unweigh_velocity()
 
     def spread_drag():
         for _ in range(plan.steps // 2):
-            drag_step(True)
-            drag_step(False)
+            drag_there()
+            drag_back()
         if layered:
             times_face_voidage()
 
