@@ -48,53 +48,53 @@ def make_exchange_filter(plan: Filter, gg, G, layered: bool, open_faces: bool, s
     shares = [open_share(c) for c in range(3)]
     steps = [make_step_at(plan, faces[c], gg.periodic, shares[c]) for c in range(3)]
 
-    def sweep(pairs):
-        """A kernel of one step of eq. (2) on every face lattice, from each pair's source field into its target."""
+    def over_faces(body):
+        """A kernel running body(c, I) (a Taichi func, c static) at every face I of every face lattice c."""
 
         @ti.kernel
-        def step():
+        def run():
             for c in ti.static(range(3)):
                 if ti.static(serial):
                     ti.loop_config(serialize=True)
                 for I in ti.grouped(ti.ndrange(*faces[c])):
-                    for k in ti.static(range(len(pairs))):
-                        ti.static(steps[c])(ti.static(pairs[k][0][c]), ti.static(pairs[k][1][c]), I)
+                    body(c, I)
 
-        return step
+        return run
+
+    def sweep(pairs):
+        """A kernel of one step of eq. (2) on every face lattice, from each pair's source field into its target."""
+
+        @ti.func
+        def body(c: ti.template(), I):
+            for k in ti.static(range(len(pairs))):
+                ti.static(steps[c])(ti.static(pairs[k][0][c]), ti.static(pairs[k][1][c]), I)
+
+        return over_faces(body)
 
     drag_there, drag_back = sweep([(B, T1), (BV, T2)]), sweep([(T1, B), (T2, BV)])
     velocity_there, velocity_back = sweep([(UF, T1)]), sweep([(T1, UF)])
 
-    @ti.kernel
-    def weigh_velocity():
+    @ti.func
+    def weigh(c: ti.template(), I):
         """UF = D s of eq. (4); s itself where f = 0 (kept by the steps)."""
-        for c in ti.static(range(3)):
-            if ti.static(serial):
-                ti.loop_config(serialize=True)
-            for I in ti.grouped(ti.ndrange(*faces[c])):
-                s = U[c][I]
-                if ti.static(layered):
-                    s *= face_voidage(I, c)
-                f = ti.static(shares[c])(I)
-                UF[c][I] = f * s if f > 0.0 else s
+        s = U[c][I]
+        if ti.static(layered):
+            s *= face_voidage(I, c)
+        f = ti.static(shares[c])(I)
+        UF[c][I] = f * s if f > 0.0 else s
 
-    @ti.kernel
-    def unweigh_velocity():
-        for c in ti.static(range(3)):
-            if ti.static(serial):
-                ti.loop_config(serialize=True)
-            for I in ti.grouped(ti.ndrange(*faces[c])):
-                f = ti.static(shares[c])(I)
-                if f > 0.0:
-                    UF[c][I] /= f
+    @ti.func
+    def unweigh(c: ti.template(), I):
+        f = ti.static(shares[c])(I)
+        if f > 0.0:
+            UF[c][I] /= f
 
-    @ti.kernel
-    def times_face_voidage():
-        for c in ti.static(range(3)):
-            if ti.static(serial):
-                ti.loop_config(serialize=True)
-            for I in ti.grouped(ti.ndrange(*faces[c])):
-                B[c][I] *= face_voidage(I, c)
+    @ti.func
+    def times_voidage(c: ti.template(), I):
+        B[c][I] *= face_voidage(I, c)
+
+    weigh_velocity, unweigh_velocity, times_face_voidage = over_faces(weigh), over_faces(unweigh), \
+        over_faces(times_voidage)
 
     def read_velocity():
         weigh_velocity()
