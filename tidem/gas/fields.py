@@ -15,7 +15,8 @@ wall_rate [W] and wall_energy [J].
 Per face, three components [face_shape(c)]: u (velocity [m/s]), us (predictor), A and C (the
 correction's coefficients), gp (pressure gradient [Pa/m]), B and Bv (deposited drag
 coefficients), kind (CLOSED, INTERIOR, INLET, OUTLET); with tubes or meshes open_face (the open
-volume of the face's drag), with meshes aperture (the face's open share). Bottom faces: inlet (superficial
+volume of the face's drag), with meshes aperture (the face's open share); with `gas.drag_averaging = "length"` uf
+(the filtered velocity the particles read) and the scratch face_tmp, face_tmp2 (`kernels/exchange_filter.py`). Bottom faces: inlet (superficial
 velocity [m/s]). Scalars: sums (CG dot products), heat_rate (max over particles of
 H_p / (m_p c_p) [1/s]), with heat t_in (the inlet gas temperature [K]), with reactions bsum (enthalpy [J] and O2 [kg] that entered through
 inlet and outlet; the most negative Y).
