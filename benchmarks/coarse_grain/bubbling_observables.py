@@ -1,17 +1,19 @@
 """The observables of a developed bubbling bed, per run, over a window (issue's coarse-graining list).
 
     python benchmarks/coarse_grain/bubbling_observables.py T_START RUN_DIR[=LABEL] ... [--csv OUT.csv] [--plot OUT.png]
+        [--cell H]
     python benchmarks/coarse_grain/bubbling_observables.py - RUNS.csv ... [--groups G1,G2,...] [--plot OUT.png]
 
 For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 0.02 s or so:
 `--set output.interval=0.02`), over the window from T_START to the run's end:
 - `height_mm`: time mean of the height under which 99 % of the solids' volume lies, each particle a
   sphere whose volume is spread over its own height (unbiased by the parcel size), from the snapshots;
-- `com_mm`: time mean of the bed's centre of mass, potential energy / (M g), from timeseries.csv;
+- `com_mm`: time mean of the bed's centre of mass, potential energy / (M g), from timeseries.csv (M from
+  run.json's bed weight per floor area);
 - `dp_std_Pa`, `dp_freq_Hz`: standard deviation of the gas pressure drop and the frequency of its
   spectrum's peak above 0.5 Hz (de-meaned, Hann window), from timeseries.csv;
 - `theta_mm2_s2`: granular temperature per grain, theta = sum m |v - u_cell|^2 / (3 sum m), u_cell the
-  mass-weighted mean velocity of the cell (cubes of CELL, across the periodic depth), each cell's sum
+  mass-weighted mean velocity of the cell (cubes of H, 6 mm unless `--cell` is given), each cell's sum
   scaled by n / (n - 1) for its n particles (an unbiased variance); a parcel's grains move with it, so
   the parcel's fluctuation is its grains';
 - `dispersion_mm2_s`: vertical dispersion coefficient D_z = slope of <(z(t + tau) - z(t))^2> / 2 over lags
@@ -27,6 +29,7 @@ in that order (the first is the reference), G1+G2 pooling two groups' runs as on
 from __future__ import annotations
 
 import csv
+import json
 import re
 import sys
 import xml.etree.ElementTree as ET
@@ -38,8 +41,7 @@ from tidem.io.vtp import read_vtp
 from tidem.results.dispersion import dispersion_coefficient, indexed_heights
 
 GRAVITY = 9.81
-BED_MASS = 0.03665  # kg: bubbling_tube_slab.toml's 28 000 grains of 1 mm sand at 2500 kg/m^3
-CELL = 0.006  # m: the slab's gas cell
+CELL = 0.006  # m: the slab's gas cell, the cubes of the granular temperature unless --cell is given
 COLUMNS = ("height_mm", "com_mm", "dp_std_Pa", "dp_freq_Hz", "theta_mm2_s2", "dispersion_mm2_s",
            "alpha_W_m2K", "tube_heat_W")
 SHOWN = ("bed height", "centre of mass", "Δp std", "Δp peak", "granular T", "dispersion", "tube alpha",
@@ -60,9 +62,9 @@ def solids_top(z: np.ndarray, r: np.ndarray, share: float = 0.99) -> float:
     return 0.5 * (lo + hi)
 
 
-def granular_temperature(x: np.ndarray, v: np.ndarray, m: np.ndarray) -> float:
-    """theta [m^2/s^2] about each cell's mass-weighted mean velocity (n / (n - 1) per cell)."""
-    cell = np.floor(x / CELL).astype(np.int64)
+def granular_temperature(x: np.ndarray, v: np.ndarray, m: np.ndarray, size: float = CELL) -> float:
+    """theta [m^2/s^2] about the mass-weighted mean velocity of each cube of `size` (n / (n - 1) per cube)."""
+    cell = np.floor(x / size).astype(np.int64)
     _, key = np.unique(cell, axis=0, return_inverse=True)
     key = key.ravel()
     n = np.bincount(key)
@@ -81,7 +83,14 @@ def snapshots(run: Path, t_start: float) -> list[tuple[float, Path]]:
     return [(t, p) for t, p in found if t >= t_start - 1e-9]
 
 
-def observe(run: Path, t_start: float) -> dict[str, float]:
+def bed_mass(run: Path) -> float:
+    """The bed's mass [kg]: run.json's weight per floor area times the floor's area, over g."""
+    info = json.loads((run / "run.json").read_text())
+    lo, hi = info["scene_echo"]["domain"]["min"], info["scene_echo"]["domain"]["max"]
+    return info["bed_weight_per_area_Pa"] * (hi[0] - lo[0]) * (hi[1] - lo[1]) / GRAVITY
+
+
+def observe(run: Path, t_start: float, cell: float = CELL) -> dict[str, float]:
     with open(run / "timeseries.csv") as f:
         rows = list(csv.DictReader(f))
     col = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
@@ -97,11 +106,11 @@ def observe(run: Path, t_start: float) -> dict[str, float]:
         x, data = read_vtp(path)
         r = data["radius"]
         heights.append(solids_top(x[:, 2], r))
-        thetas.append(granular_temperature(x, data["velocity"], r**3))
+        thetas.append(granular_temperature(x, data["velocity"], r**3, cell))
         z_by_id.append((ts, indexed_heights(x, data["id"])))
     return {
         "height_mm": 1e3 * float(np.mean(heights)),
-        "com_mm": 1e3 * float(np.mean(col["potential_energy_J"][win]) / (BED_MASS * GRAVITY)),
+        "com_mm": 1e3 * float(np.mean(col["potential_energy_J"][win]) / (bed_mass(run) * GRAVITY)),
         "dp_std_Pa": float(dp.std()),
         "dp_freq_Hz": float(freq[band][np.argmax(power[band])]),
         "theta_mm2_s2": 1e6 * float(np.mean(thetas)),
@@ -170,6 +179,11 @@ def main(argv: list[str]) -> None:
         i = argv.index("--plot")
         figure = Path(argv[i + 1])
         argv = argv[:i] + argv[i + 2:]
+    cell = CELL
+    if "--cell" in argv:
+        i = argv.index("--cell")
+        cell = float(argv[i + 1])
+        argv = argv[:i] + argv[i + 2:]
     keep = None
     if "--groups" in argv:
         i = argv.index("--groups")
@@ -183,7 +197,7 @@ def main(argv: list[str]) -> None:
                 rows += [{"run": r["run"], **{c: float(r[c]) for c in COLUMNS}} for r in csv.DictReader(f)]
             continue
         path, _, label = spec.partition("=")
-        obs = observe(Path(path), float(argv[0]))
+        obs = observe(Path(path), float(argv[0]), cell)
         rows.append({"run": label or path, **obs})
         print(f"| {label or path} | " + " | ".join(f"{obs[c]:.4g}" for c in COLUMNS) + " |", flush=True)
     if keep is not None:  # each kept group, "A+B" pooling groups A and B under that name
