@@ -169,26 +169,21 @@ def print_groups(rows: list[dict]) -> None:
         print(f"| {name} | {len(members)} | " + " | ".join(cells) + " |")
 
 
+def take_option(argv: list[str], flag: str) -> tuple[list[str], str | None]:
+    """argv without `flag` and its value, and that value (None where the flag is absent)."""
+    if flag not in argv:
+        return argv, None
+    i = argv.index(flag)
+    return argv[:i] + argv[i + 2:], argv[i + 1]
+
+
 def main(argv: list[str]) -> None:
-    out = figure = None
-    if "--csv" in argv:
-        i = argv.index("--csv")
-        out = Path(argv[i + 1])
-        argv = argv[:i] + argv[i + 2:]
-    if "--plot" in argv:
-        i = argv.index("--plot")
-        figure = Path(argv[i + 1])
-        argv = argv[:i] + argv[i + 2:]
-    cell = CELL
-    if "--cell" in argv:
-        i = argv.index("--cell")
-        cell = float(argv[i + 1])
-        argv = argv[:i] + argv[i + 2:]
-    keep = None
-    if "--groups" in argv:
-        i = argv.index("--groups")
-        keep = argv[i + 1].split(",")
-        argv = argv[:i] + argv[i + 2:]
+    argv, out = take_option(argv, "--csv")
+    argv, figure = take_option(argv, "--plot")
+    argv, cell = take_option(argv, "--cell")
+    argv, keep = take_option(argv, "--groups")
+    cell = CELL if cell is None else float(cell)
+    keep = None if keep is None else keep.split(",")
     print("| run | " + " | ".join(COLUMNS) + " |\n|" + "---|" * (len(COLUMNS) + 1))
     rows = []
     for spec in argv[1:]:
@@ -206,9 +201,9 @@ def main(argv: list[str]) -> None:
                 for i, r in enumerate(r for g in name.split("+") for r in groups[g])]
     print_groups(rows)
     if figure is not None:
-        plot_groups(rows, figure)
+        plot_groups(rows, Path(figure))
     if out is not None:
-        with open(out, "w", newline="") as f:
+        with open(Path(out), "w", newline="") as f:
             w = csv.DictWriter(f, ["run", *COLUMNS])
             w.writeheader()
             w.writerows(rows)

@@ -11,9 +11,10 @@ W/(m² K). Runs whose labels differ only in a trailing `_sN` are grouped (the me
 from __future__ import annotations
 
 import json
-import re
 import sys
 from pathlib import Path
+
+from bubbling_observables import seed_groups
 
 ROUTES = ("mean", "contact_spot", "gas_gap", "gas_lens", "gas")
 
@@ -25,10 +26,9 @@ def routes(run: Path) -> dict[str, float]:
 
 
 def main(argv: list[str]) -> None:
-    groups: dict[str, list[dict[str, float]]] = {}
-    for spec in argv:
-        path, _, label = spec.partition("=")
-        groups.setdefault(re.sub(r"_s\d+$", "", label or path), []).append(routes(Path(path)))
+    runs = [{"run": label or path, **routes(Path(path))}
+            for path, _, label in (spec.partition("=") for spec in argv)]
+    groups = seed_groups(runs)
     print("| runs | seeds | " + " | ".join(ROUTES) + " |\n|" + "---|" * (len(ROUTES) + 2))
     for name, rows in groups.items():
         mean = {r: sum(row[r] for row in rows) / len(rows) for r in ROUTES}
