@@ -49,3 +49,30 @@ def test_the_scene_estimate_matches_the_built_model():
     assert fields + items["numerics.max_neighbors"] + sort_copy == \
         model.memory_bytes() - model.grid.n_cells * memory.CELL_BYTES
     assert memory.lattice_site_count(scene.scene.particles[0].region, 0.0102, "cubic") == model.capacity
+
+
+@pytest.mark.parametrize("drag_averaging", ["cells", "length"])
+def test_the_gas_estimate_counts_every_field_a_cell_has(solver_for, drag_averaging):
+    """The gas grid's allocated fields, each counted as cells, faces or layers, against `gas_cell_bytes` (the
+    averaging-length filters' scratch fields included); the pressure band of a small grid's direct solve is not
+    a per-cell field and is left out."""
+    import math
+
+    import taichi as ti
+
+    from tests.kernels.test_gas_averaging import fixed_grains, lattice_bed
+
+    raw = fixed_grains(lattice_bed(hole=(0.015, 0.03, 0.0046)), 0.003, length=0.012, tube=True)
+    raw["gas"]["drag_averaging"] = drag_averaging
+    s = solver_for(raw)
+    gas = s.gas
+    cells = math.prod(gas.gg.cells)
+    per_cell = 0
+    for name, value in vars(gas.G).items():
+        for field in value if isinstance(value, list) else [value]:
+            size = math.prod(field.shape)
+            if name not in ("band", "band_y") and 2 * size >= cells:
+                per_cell += round(size / cells) * (4 if field.dtype in (ti.f32, ti.i32) else 8)
+    filters = memory.gas_filters(s.model.scene, gas.layers)
+    assert filters == tuple(f is not None for f in gas.filters) == (True, True, drag_averaging == "length")
+    assert per_cell == memory.gas_cell_bytes(s.model.features, gas.layers, filters)

@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from tidem.gas.geometry import gas_grid, layers_for, voidage_layers
+from tidem.gas.geometry import averaging_length, gas_grid, layers_for, voidage_filters, voidage_layers
 from tidem.particles.storage_order import sorts_storage
 from tidem.scene.averaging_layout import cell_grid
 from tidem.scene.sizes import gas_cell_counts, largest_parcel, max_diameter, parcel_count
@@ -111,14 +111,23 @@ def neighbor_bytes(feat, neighbors: int) -> int:
     return per
 
 
-def gas_cell_bytes(feat, layers: int = 1) -> int:
-    """Bytes of the gas grid's Taichi fields per cell (`tidem.gas.phase`), with `layers` voidage layers a cell."""
+def gas_filters(scene, layers: int) -> tuple[bool, bool, bool]:
+    """Which averaging-length filters a scene's gas makes (cells, layers, the drag's exchange on the faces;
+    `tidem.gas.geometry.voidage_filters`) with `layers` voidage layers a cell."""
+    made = voidage_filters(gas_grid(scene), averaging_length(scene), layers, scene.gas.drag_averaging == "length")
+    return tuple(f is not None for f in made)
+
+
+def gas_cell_bytes(feat, layers: int = 1, filters: tuple[bool, bool, bool] = (False, False, False)) -> int:
+    """Bytes of the gas grid's Taichi fields per cell (`tidem.gas.fields.gas_fields`), with `layers` voidage layers
+    a cell and the scratch fields of the averaging-length `filters` (`gas_filters`)."""
     fp = feat.float_bytes
     open_share = 4 * bool(feat.n_meshes or feat.n_tubes)  # open volumes of the cell and its faces beside walls
     cut = 4 * bool(feat.n_meshes)  # a mesh's gas part of the cell and its faces' apertures
     layered = layers if layers > 1 else 0
-    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share + cut + layered) \
-        + 4 * 4
+    scratch = filters[0] + layers * filters[1] + 3 * 3 * filters[2]  # solid_tmp, layer_tmp; uf, face_tmp(2) per face
+    return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share + cut + layered
+                 + scratch) + 4 * 4
 
 
 def averaging_cell_bytes(feat) -> int:
@@ -211,8 +220,9 @@ def scene_items(scene) -> list[Item]:
         grains = scene.gas.parcel_voidage == "grain_layers"  # layers one grain high, else one parcel high
         layers = layers_for(scene, min((1 if grains else g.coarse_grain) * _smallest_diameter(g.diameter)
                                        for g in scene.particles))
-        items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * (gas_cell_bytes(feat, layers)
-                          + GAS_HOST_BYTES_PER_CELL), "gas.cell_size", "use larger gas cells or a smaller domain"))
+        per_cell = gas_cell_bytes(feat, layers, gas_filters(scene, layers)) + GAS_HOST_BYTES_PER_CELL
+        items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * per_cell, "gas.cell_size",
+                          "use larger gas cells or a smaller domain"))
     if scene.averaging is not None:
         cells = math.prod(cell_grid(scene)[0])
         items.append(Item(f"the {format_count(cells)} averaging cells", cells * averaging_cell_bytes(feat),
@@ -279,7 +289,8 @@ def field_bytes(model) -> int:
     per += sort_bytes(model)
     cells = model.grid.n_cells * CELL_BYTES
     if f.gas:
-        cells += math.prod(gas_grid(model.scene).cells) * gas_cell_bytes(f, voidage_layers(model))
+        layers = voidage_layers(model)
+        cells += math.prod(gas_grid(model.scene).cells) * gas_cell_bytes(f, layers, gas_filters(model.scene, layers))
     return per * model.capacity + cells + mesh_field_bytes(model)
 
 
