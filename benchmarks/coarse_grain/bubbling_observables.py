@@ -83,6 +83,16 @@ def snapshots(run: Path, t_start: float) -> list[tuple[float, Path]]:
     return [(t, p) for t, p in found if t >= t_start - 1e-9]
 
 
+def run_folder(spec: str, needs: tuple[str, ...] = ("run.json", "timeseries.csv", "snapshots.pvd")) -> Path:
+    """The run folder of a RUN_DIR argument; exits with one line naming what is missing."""
+    run = Path(spec)
+    missing = [name for name in needs if not (run / name).is_file()]
+    if missing:
+        sys.exit(f"{spec}: not a finished tidem run folder (no {', '.join(missing)}); give the --out folder of "
+                 "`tidem scene`")
+    return run
+
+
 def bed_mass(run: Path) -> float:
     """The bed's mass [kg]: run.json's weight per floor area times the floor's area, over g."""
     info = json.loads((run / "run.json").read_text())
@@ -192,7 +202,7 @@ def main(argv: list[str]) -> None:
                 rows += [{"run": r["run"], **{c: float(r[c]) for c in COLUMNS}} for r in csv.DictReader(f)]
             continue
         path, _, label = spec.partition("=")
-        obs = observe(Path(path), float(argv[0]), cell)
+        obs = observe(run_folder(path), float(argv[0]), cell)
         rows.append({"run": label or path, **obs})
         print(f"| {label or path} | " + " | ".join(f"{obs[c]:.4g}" for c in COLUMNS) + " |", flush=True)
     if keep is not None:  # each kept group, "A+B" pooling groups A and B under that name

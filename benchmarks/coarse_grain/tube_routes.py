@@ -14,7 +14,7 @@ import json
 import sys
 from pathlib import Path
 
-from bubbling_observables import seed_groups
+from bubbling_observables import run_folder, seed_groups
 
 ROUTES = ("mean", "contact_spot", "gas_gap", "gas_lens", "gas")
 
@@ -26,7 +26,7 @@ def routes(run: Path) -> dict[str, float]:
 
 
 def main(argv: list[str]) -> None:
-    runs = [{"run": label or path, **routes(Path(path))}
+    runs = [{"run": label or path, **routes(run_folder(path, ("run.json",)))}
             for path, _, label in (spec.partition("=") for spec in argv)]
     groups = seed_groups(runs)
     print("| runs | seeds | " + " | ".join(ROUTES) + " |\n|" + "---|" * (len(ROUTES) + 2))
