@@ -213,7 +213,7 @@ def main(argv: list[str]) -> None:
     if figure is not None:
         plot_groups(rows, Path(figure))
     if out is not None:
-        with open(Path(out), "w", newline="") as f:
+        with open(out, "w", newline="") as f:
             w = csv.DictWriter(f, ["run", *COLUMNS])
             w.writeheader()
             w.writerows(rows)

@@ -1,9 +1,13 @@
 """The memory estimate (`tidem.sim.memory`): readable sizes, the scene-only estimate before any
 allocation, and the same field bytes as the built model."""
 
+import math
+
 import pytest
+import taichi as ti
 
 from tests.conftest import make_scene
+from tests.kernels.test_gas_averaging import fixed_grains, lattice_bed
 from tidem.scene.errors import SceneError
 from tidem.scene.load import validate
 from tidem.sim import memory
@@ -56,12 +60,6 @@ def test_the_gas_estimate_counts_every_field_a_cell_has(solver_for, drag_averagi
     """The gas grid's allocated fields, each counted as cells, faces or layers, against `gas_cell_bytes` (the
     averaging-length filters' scratch fields included); the pressure band of a small grid's direct solve is not
     a per-cell field and is left out."""
-    import math
-
-    import taichi as ti
-
-    from tests.kernels.test_gas_averaging import fixed_grains, lattice_bed
-
     raw = fixed_grains(lattice_bed(hole=(0.015, 0.03, 0.0046)), 0.003, length=0.012, tube=True)
     raw["gas"]["drag_averaging"] = drag_averaging
     s = solver_for(raw)
