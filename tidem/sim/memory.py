@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from tidem.gas.geometry import averaging_length, gas_grid, layers_for, voidage_filters, voidage_layers
+from tidem.kernels.gas_band import band_width
 from tidem.particles.storage_order import sorts_storage
 from tidem.scene.averaging_layout import cell_grid
 from tidem.scene.sizes import gas_cell_counts, largest_parcel, max_diameter, parcel_count
@@ -130,6 +131,13 @@ def gas_cell_bytes(feat, layers: int = 1, filters: tuple[bool, bool, bool] = (Fa
                  + scratch) + 4 * 4
 
 
+def gas_band_bytes(scene) -> int:
+    """Bytes per gas cell of the direct pressure solve (`kernels/gas_band.py`: the factor's w + 1 entries and
+    band_y, float64) on Taichi's present backend; 0 where the CG solves (a GPU, a grid too wide or wrapping)."""
+    width = band_width(gas_grid(scene))
+    return 8 * (width + 2) if width else 0
+
+
 def averaging_cell_bytes(feat) -> int:
     """Bytes per averaging cell or ring sector (float64 sums per channel)."""
     from tidem.kernels.averaging import channels
@@ -220,7 +228,8 @@ def scene_items(scene) -> list[Item]:
         grains = scene.gas.parcel_voidage == "grain_layers"  # layers one grain high, else one parcel high
         layers = layers_for(scene, min((1 if grains else g.coarse_grain) * _smallest_diameter(g.diameter)
                                        for g in scene.particles))
-        per_cell = gas_cell_bytes(feat, layers, gas_filters(scene, layers)) + GAS_HOST_BYTES_PER_CELL
+        per_cell = gas_cell_bytes(feat, layers, gas_filters(scene, layers)) + gas_band_bytes(scene)
+        per_cell += GAS_HOST_BYTES_PER_CELL
         items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * per_cell, "gas.cell_size",
                           "use larger gas cells or a smaller domain"))
     if scene.averaging is not None:
@@ -290,7 +299,8 @@ def field_bytes(model) -> int:
     cells = model.grid.n_cells * CELL_BYTES
     if f.gas:
         layers = voidage_layers(model)
-        cells += math.prod(gas_grid(model.scene).cells) * gas_cell_bytes(f, layers, gas_filters(model.scene, layers))
+        per_cell = gas_cell_bytes(f, layers, gas_filters(model.scene, layers)) + gas_band_bytes(model.scene)
+        cells += math.prod(gas_grid(model.scene).cells) * per_cell
     return per * model.capacity + cells + mesh_field_bytes(model)
 
 
