@@ -77,3 +77,17 @@ def test_the_gas_estimate_counts_every_field_a_cell_has(solver_for, drag_averagi
     band = memory.gas_band_bytes(s.model.scene)
     assert band == 8 * (gas.band + 2)
     assert per_cell == memory.gas_cell_bytes(s.model.features, gas.layers, filters) + band
+
+
+def test_the_band_is_counted_as_the_cpus_before_taichi_starts(monkeypatch):
+    """`tidem check` estimates a scene before Taichi starts: a thin grid's direct-solve band then counts as on the CPU
+    (fluidized_tube's 20 x 1 x 50 cells: half-bandwidth 20), and not at all once a GPU runs."""
+    import tidem.runtime.startup as startup
+    raw = make_scene(gas={"density": 1.2, "viscosity": 1.8e-5, "cell_size": 0.004, "inlet_velocity": 1.0},
+                     domain={"min": [0, 0, 0], "max": [0.08, 0.004, 0.2], "walls": "auto"})
+    raw["particles"][0].update(diameter={"value": 0.001}, positions=[[0.04, 0.002, 0.1]])
+    scene = validate(raw).scene
+    monkeypatch.setattr(startup, "_current", None)
+    assert memory.gas_band_bytes(scene) == 8 * (20 + 2)
+    monkeypatch.setattr(startup, "_current", ("cuda", "float64", 1))
+    assert memory.gas_band_bytes(scene) == 0

@@ -86,6 +86,11 @@ def restart(arch: str = "cpu", precision: str = "float64", threads: int | None =
     return ensure_taichi(arch, precision, threads)
 
 
+def running_arch() -> str | None:
+    """The backend Taichi runs on ('cpu', 'cuda', 'vulkan'), None before `ensure_taichi` started it."""
+    return None if _current is None else _current[0]
+
+
 def _program_size() -> tuple[int, int]:
     """The program's field trees and compiled kernels: what a start leaves, and what use adds."""
     runtime = ti.lang.impl.get_runtime()

@@ -23,6 +23,7 @@ from pathlib import Path
 from tidem.gas.geometry import averaging_length, gas_grid, layers_for, voidage_filters, voidage_layers
 from tidem.kernels.gas_band import band_width
 from tidem.particles.storage_order import sorts_storage
+from tidem.runtime.startup import running_arch
 from tidem.scene.averaging_layout import cell_grid
 from tidem.scene.sizes import gas_cell_counts, largest_parcel, max_diameter, parcel_count
 from tidem.sim.features import scene_features
@@ -133,8 +134,9 @@ def gas_cell_bytes(feat, layers: int = 1, filters: tuple[bool, bool, bool] = (Fa
 
 def gas_band_bytes(scene) -> int:
     """Bytes per gas cell of the direct pressure solve (`kernels/gas_band.py`: the factor's w + 1 entries and
-    band_y, float64) on Taichi's present backend; 0 where the CG solves (a GPU, a grid too wide or wrapping)."""
-    width = band_width(gas_grid(scene))
+    band_y, float64) on Taichi's present backend, on the CPU before Taichi starts (`tidem check`); 0 where the
+    CG solves (a GPU, a grid too wide or wrapping)."""
+    width = band_width(gas_grid(scene), running_arch() in (None, "cpu"))
     return 8 * (width + 2) if width else 0
 
 
