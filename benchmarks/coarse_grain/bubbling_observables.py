@@ -18,7 +18,8 @@ For each `tidem scene` run folder of `bubbling_tube_slab.toml` (snapshots every 
   the parcel's fluctuation is its grains';
 - `dispersion_mm2_s`: vertical dispersion coefficient D_z = slope of <(z(t + tau) - z(t))^2> / 2 over lags
   tau of 0.02-0.1 s, particles followed by id (a mixing rate; `tidem.results.dispersion`, the observable's);
-- `alpha_W_m2K`, `tube_heat_W`: time means of the tube's alpha and heat flow, from timeseries.csv.
+- `alpha_W_m2K`, `tube_heat_W`: time means of the tube's alpha and heat flow, from timeseries.csv (nan for a
+  bed without a tube).
 Prints one Markdown row per run; `--csv` also writes them. Then, grouping runs whose labels differ only in
 a trailing `_sN` (seeds), one row per group: the mean over its seeds, their range, and the mean's deviation
 from the first group's mean; `--plot` draws those deviations as bars with the seeds' range (5 % shaded).
@@ -111,6 +112,7 @@ def observe(run: Path, t_start: float, cell: float = CELL) -> dict[str, float]:
     freq = np.fft.rfftfreq(1 << 15, dt)
     power = np.abs(np.fft.rfft((dp - dp.mean()) * np.hanning(len(dp)), 1 << 15)) ** 2
     band = freq > 0.5
+    tube = "tubes0_alpha_W_m2K" in col
     heights, thetas, z_by_id = [], [], []
     for ts, path in snapshots(run, t_start):
         x, data = read_vtp(path)
@@ -118,15 +120,16 @@ def observe(run: Path, t_start: float, cell: float = CELL) -> dict[str, float]:
         heights.append(solids_top(x[:, 2], r))
         thetas.append(granular_temperature(x, data["velocity"], r**3, cell))
         z_by_id.append((ts, indexed_heights(x, data["id"])))
+    dz = dispersion_coefficient(z_by_id)  # None: a window shorter than its lags
     return {
         "height_mm": 1e3 * float(np.mean(heights)),
         "com_mm": 1e3 * float(np.mean(col["potential_energy_J"][win]) / (bed_mass(run) * GRAVITY)),
         "dp_std_Pa": float(dp.std()),
         "dp_freq_Hz": float(freq[band][np.argmax(power[band])]),
         "theta_mm2_s2": 1e6 * float(np.mean(thetas)),
-        "dispersion_mm2_s": 1e6 * dispersion_coefficient(z_by_id),
-        "alpha_W_m2K": float(np.mean(col["tubes0_alpha_W_m2K"][win])),
-        "tube_heat_W": float(np.mean(col["tubes0_heat_W"][win])),
+        "dispersion_mm2_s": float("nan") if dz is None else 1e6 * dz,
+        "alpha_W_m2K": float(np.mean(col["tubes0_alpha_W_m2K"][win])) if tube else float("nan"),
+        "tube_heat_W": float(np.mean(col["tubes0_heat_W"][win])) if tube else float("nan"),
     }
 
 

@@ -26,13 +26,15 @@ from tidem.analytic.fluidized_bed_heat import molerus, wen_yu_minimum_fluidizati
 
 
 def bed_properties(scene: dict) -> dict:
-    """Grain diameter, particle density and heat capacity, gas properties and velocity of a scene."""
+    """Grain diameter, particle density and heat capacity, gas properties and velocity of a scene (of a scheduled
+    inlet velocity the last value, which the run holds to its end)."""
     group = scene["particles"][0]
     mat = scene["materials"][group["material"]]
     gas = scene["gas"]
+    u = gas["inlet_velocity"]
     return {"d": group["diameter"]["value"], "rho_p": mat["density"], "c_p": mat["heat_capacity"],
             "rho_g": gas["density"], "mu": gas["viscosity"], "c_g": gas["heat_capacity"],
-            "k_g": scene["heat"].get("gas_conductivity", 0.026), "U": gas["inlet_velocity"]}
+            "k_g": scene["heat"].get("gas_conductivity", 0.026), "U": u["values"][-1] if isinstance(u, dict) else u}
 
 
 def block_mean(t: np.ndarray, y: np.ndarray, block: float) -> tuple[float, float, int]:
