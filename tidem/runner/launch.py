@@ -194,6 +194,8 @@ def execute(prepared: Prepared, progress: bool = True, render: bool = True, plot
         s = result.summary
         say(f"{result.status}: {s['steps']} steps in {s['wall_s']:.1f} s "
             f"({s['particle_steps_per_s']:.3g} particle-steps/s); output in {out_dir}")
+        if "above_open_top" in s:
+            say("tidem: note: " + s["above_open_top"]["note"])
         if result.status == "interrupted":
             return result
         rendered = background is not None and finish_render(background, out_dir, frame_progress, say)

@@ -143,7 +143,7 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         out.flush()  # every snapshot it lists on disk
         state = {"snap_dt": snap_dt, "series_dt": series_dt, "next_snap": next_snap, "next_series": next_series,
                  "entries": out.entries, "series_rows": out.series.rows, "last_sample_t": last_sample_t,
-                 "output": output_table, "wall_s": wall_before + time.perf_counter() - t0}
+                 "output": output_table, "wall_s": wall_before + time.perf_counter() - t0, "above_top": out.above_top}
         if out.profiles is not None:
             state["profiles"] = out.profiles.state()
         if out.averages is not None:
@@ -242,6 +242,8 @@ def run(model: Model, out_dir: Path, progress: bool = True, solver: Solver | Non
         data = summary(model, solver, status, wall, message,
                        float(np.mean(counts)) if counts is not None and len(counts) else None)
         data["setup_s"] = setup_s
+        if (above := out.above_top_note(data["particles"])) is not None:
+            data["above_open_top"] = above
         data["profile"] = solver.timer.table(solver.steps - steps0)
         if resume is not None:
             data["resumed_from"] = checkpoint.describe(resume[0])

@@ -65,6 +65,10 @@ class Output:
             else:
                 (self.dir / pvd).unlink(missing_ok=True)
         self.meshes = MeshOutput(self.dir, model.meshes, self.entries)  # each mesh at t = 0, before the renderer starts
+        dom = model.scene.domain
+        self.open_top = (dom.max[2] if model.features.gas and "z" not in dom.periodic and "z+" not in dom.wall_sides()
+                         else None)  # the gas grid's open top: particles above it read its top cell
+        self.above_top: list[tuple[float, int]] = [tuple(e) for e in loop.get("above_top", [])] if loop else []
         self._particles = None  # the snapshot's particle fields (`_particle_copier`)
         self._writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="tidem-snapshots")
         self._pending: list[tuple[Future, Path, Callable | None]] = []
@@ -133,6 +137,8 @@ class Output:
             "contacts": host["ncontact"][idx].astype(np.int32),
         }
         self.entries.append((t, f"snapshots/{name}"))
+        if self.open_top is not None and (above := int((points[:, 2] > self.open_top).sum())):
+            self.above_top.append((t, above))
         self.meshes.snapshot()
         gas = None
         if self.gas_dir is not None:
@@ -163,6 +169,19 @@ class Output:
         if on_written is not None:
             on_written(path)
         return True
+
+    def above_top_note(self, particles: int) -> dict | None:
+        """run.json's `above_open_top` where snapshots found particles above the gas grid's open top, else None:
+        the snapshots, the most particles above it and when first (the bed expanded or splashed out of the
+        domain; those particles read the grid's top cell), with the note the CLI prints."""
+        if not self.above_top:
+            return None
+        first, most = self.above_top[0][0], max(n for _, n in self.above_top)
+        return {"snapshots": len(self.above_top), "most": most, "first_s": first,
+                "note": f"{len(self.above_top)} of {len(self.entries)} snapshots, the first at t = {first:.4g} s, "
+                        f"had particles above the domain's open top z = {self.open_top:g} m (at most {most}, "
+                        f"{100 * most / max(particles, 1):.2g} % of them), where the gas grid ends and they read its "
+                        "top cell: raise domain.max[2] so that the expanded bed and its splashes stay inside"}
 
     def poll(self) -> None:
         """Finish the snapshots the writer thread has written so far (in order)."""
