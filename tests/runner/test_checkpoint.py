@@ -177,6 +177,7 @@ def test_resume_refuses_an_edited_scene_naming_the_key():
     edited = hot_pour(0.2)  # a later end time and new output cadence may change
     edited["output"]["interval"] = 0.02
     edited["render"] = {"range": [300.0, 310.0]}  # a [render] table added
+    edited["numerics"]["max_overlap"] = 0.15  # the health check's limit: it stops a run, never moves one
     meta = {"scene": raw, "precision": "float64"}
     checkpoint.check_scene(meta, edited, "float64")
     edited["materials"]["sand"]["friction"] = 0.3

@@ -30,8 +30,9 @@ FILE = "checkpoint.npz"
 # (kernels/geometry.py, slab_axis_for), which changes the owners of a bed's pairs
 FORMAT = 3
 # Scene keys that may change between a run and its resume: output cadence, rendering, the
-# end time and the descriptive text. Anything else would make the continuation a different run.
-RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "description", "runtime")
+# end time, the overlap limit of the health check (it stops a run, it never moves one) and the descriptive
+# text. Anything else would make the continuation a different run.
+RESUMABLE_KEYS = ("output.", "render.", "numerics.t_end", "numerics.max_overlap", "description", "runtime")
 # Rewritten before use (the conduction flag by every force pass, the blocks' shares of the surfaces' heat
 # flows by every pass that conducts, the reactions' gas book and their totals' rows (rbook) by every reaction step, `sums` by every energy sum and, in the gas, `sums` and the direct solve's band by every pressure
 # solve, the rest by every neighbour build): not kept. The quiet partners' groups (nbr_touch, nbr_end, nbr_gap) are not kept
@@ -153,7 +154,7 @@ def check_scene(meta: dict, scene_raw: dict, precision: str) -> None:
     if bad:
         raise CheckpointError(
             f"the scene differs from the one the checkpoint was made with in {', '.join(bad)}; only output, render, "
-            "numerics.t_end and the description may change on resume (start a new run to change the others)")
+            "numerics.t_end, numerics.max_overlap and the description may change on resume (start a new run to change the others)")
     if meta["precision"] != precision:
         raise CheckpointError(f"the checkpoint is {meta['precision']}, the scene asks for {precision}")
 

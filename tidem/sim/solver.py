@@ -345,7 +345,8 @@ class Solver(TallyReads):
             raise RunError(
                 f"particle {S.ident[worst_at]} overlaps a neighbour or wall by {100 * worst:.1f} % of its radius at t = {self.t:.6g} s "
                 f"(limit {100 * limit:.0f} %): the contacts are too soft or too fast for this step; raise "
-                "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap")
+                "youngs_modulus, lower numerics.dt_fraction, or raise numerics.max_overlap (a run with a checkpoint "
+                "continues under a raised one: --resume RUN --set numerics.max_overlap=...)")
 
     def release(self) -> None:
         self.particle_stats.release()
