@@ -154,7 +154,8 @@ def check_scene(meta: dict, scene_raw: dict, precision: str) -> None:
     if bad:
         raise CheckpointError(
             f"the scene differs from the one the checkpoint was made with in {', '.join(bad)}; only output, render, "
-            "numerics.t_end, numerics.max_overlap and the description may change on resume (start a new run to change the others)")
+            "numerics.t_end, numerics.max_overlap and the description may change on resume (start a new run to "
+            "change the others)")
     if meta["precision"] != precision:
         raise CheckpointError(f"the checkpoint is {meta['precision']}, the scene asks for {precision}")
 

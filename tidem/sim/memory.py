@@ -121,8 +121,8 @@ def gas_filters(scene, layers: int) -> tuple[bool, bool, bool]:
 
 
 def gas_cell_bytes(feat, layers: int = 1, filters: tuple[bool, bool, bool] = (False, False, False)) -> int:
-    """Bytes of the gas grid's Taichi fields per cell (`tidem.gas.fields.allocate_gas_fields`), with `layers` voidage layers
-    a cell and the scratch fields of the averaging-length `filters` (`gas_filters`)."""
+    """Bytes of the gas grid's Taichi fields per cell (`tidem.gas.fields.allocate_gas_fields`), with `layers` voidage
+    layers a cell and the scratch fields of the averaging-length `filters` (`gas_filters`)."""
     fp = feat.float_bytes
     open_share = 4 * bool(feat.n_meshes or feat.n_tubes)  # open volumes of the cell and its faces beside walls
     cut = 4 * bool(feat.n_meshes)  # a mesh's gas part of the cell and its faces' apertures
