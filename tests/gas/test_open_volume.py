@@ -47,10 +47,10 @@ def test_the_gas_cells_share_the_whole_open_volume_and_cells_away_from_the_tube_
     assert f[5, 0, 11] > 1.25 and f[6, 0, 11] > 1.25
 
 
-def lattice_bed(spacing=0.0005, mesh_dir=None):
+def lattice_bed(spacing=0.0005, mesh_dir=None, tube_shape="cells"):
     """Fixed grains of 0.1 mm on a lattice of `spacing` all through the space outside a 15 mm tube (centres
     at least a grain's radius from it), as fluidized_tube's tube on its 4 mm cells; with `mesh_dir` the tube
-    is drawn there as a 48-facet mesh (grains outside the 48-gon)."""
+    is drawn there as a 48-facet mesh (grains outside the 48-gon); `tube_shape` the gas's `tube_shape`."""
     axes = [(np.arange(round(length / spacing)) + 0.5) * spacing for length in (0.032, 0.004, 0.036)]
     x, y, z = np.meshgrid(*axes, indexing="ij")
     pos = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
@@ -67,7 +67,8 @@ def lattice_bed(spacing=0.0005, mesh_dir=None):
                             "friction": 0.3}},
         particles=[{"name": "bed", "material": "sand", "diameter": {"value": 1e-4}, "fixed": True,
                     "positions": pos.tolist()}],
-        gas={"cell_size": 0.004, "inlet_velocity": 0.01, "coupling_interval": 1, "voidage": "cell"},
+        gas={"cell_size": 0.004, "inlet_velocity": 0.01, "coupling_interval": 1, "voidage": "cell",
+             "tube_shape": tube_shape},
         numerics={"dt": 1e-5, "force_dt": True},
         **walls,
     )

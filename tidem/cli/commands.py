@@ -213,7 +213,7 @@ def check(
     A scene with errors, initial overlaps or more than the available memory is refused with exit code 2 (docs/errors.md)."""
     import numpy as np
 
-    from tidem.runner.check_report import (gas_line, gas_notes, mesh_convection_lines, output_notes,
+    from tidem.runner.check_report import (cut_walls_text, gas_line, gas_notes, mesh_convection_lines, output_notes,
                                            parcel_restitution_text)
     from tidem.runner.output_size import output_bytes
     from tidem.scene.schedule import scheduled_keys, summary_line
@@ -252,7 +252,7 @@ def check(
         *[summary_line(key, plan) for key, plan in scheduled_keys(loaded.scene)],
         *([gas_line(model)] if f.gas else []),
         *report_lines(model.meshes, model.mesh_table, 2 * float(model.radius.min())),
-        *(model.gas_cut.report_lines() if model.gas_cut is not None else []),
+        *(model.gas_cut.report_lines(cut_walls_text(model)) if model.gas_cut is not None else []),
         *(mesh_convection_lines(model) if f.gas and f.heat else []),
         (f"grid: {'x'.join(map(str, model.grid.cells))} cells; neighbour capacity {model.max_neighbors}; "
          f"skin {model.skin:.3g} m" if f.contacts else "grid: none (no contacts, no neighbour search)"),

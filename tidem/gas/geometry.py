@@ -13,6 +13,7 @@ import numpy as np
 
 from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
+from tidem.gas.tube_cut import tube_cut_walls, tubes_triangles
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
 from tidem.kernels.gas_smoothing import plan_filter
 from tidem.kernels.layered_voidage import parcel_rows
@@ -54,19 +55,22 @@ def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
     return solid
 
 
-def gas_walls(gg: GasGrid, tubes: list[dict], meshes: list,
-              cut: GasCut | None = None) -> tuple[np.ndarray, list[np.ndarray], GasCut | None]:
-    """The walls the gas sees: solid cells (in a tube, or out of the gas's reach behind a mesh),
-    face kinds (`face_kinds`, with the faces a mesh blocks closed), and the meshes' cut of the grid
-    (`cut` if given, as the Model keeps it; None without meshes; meshes are static when there is
-    gas, `tidem.scene.checks`)."""
-    solid = solid_cells(gg, tubes)
+def gas_walls(gg: GasGrid, tubes: list[dict], meshes: list, cut: GasCut | None = None,
+              cut_tubes: bool = False) -> tuple[np.ndarray, list[np.ndarray], GasCut | None]:
+    """The walls the gas sees: solid cells (in a tube, or out of the gas's reach behind a mesh or, with
+    `cut_tubes` (`gas.tube_shape = "cut"`), inside a tube drawn as a prism, `tidem.gas.tube_cut`), face kinds
+    (`face_kinds`, with the faces the cut blocks closed), and the cut of the grid (`cut` if given, as the Model
+    keeps it; None without meshes and cut tubes; meshes are static when there is gas, `tidem.scene.checks`)."""
+    solid = solid_cells(gg, [] if cut_tubes else tubes)
     kinds = face_kinds(gg, solid)
-    if not meshes:
+    if not meshes and not (cut_tubes and tubes):
         return solid, kinds, None
     if cut is None:
-        triangles = np.concatenate([m.vertices[m.triangles] for m in meshes])
-        cut = gas_cut(gg, triangles, solid, kinds, spans_period(gg, meshes))
+        tri, clip = tubes_triangles(gg, tubes if cut_tubes else [])
+        if meshes:
+            tri = np.concatenate([tri, *(m.vertices[m.triangles] for m in meshes)])
+            clip = np.concatenate([clip, spans_period(gg, meshes)])
+        cut = gas_cut(gg, tri, solid, kinds, clip)
     solid = solid | cut.unreachable.astype(np.int32)
     kinds = [np.where(b, CLOSED, k) for b, k in zip(cut.blocked, face_kinds(gg, solid))]
     return solid, kinds, cut
@@ -81,12 +85,17 @@ def spans_period(gg: GasGrid, meshes: list) -> np.ndarray:
     return np.concatenate(rows).astype(bool)
 
 
+def cuts_tubes(scene) -> bool:
+    """Whether the gas grid's tubes are cut cells (`gas.tube_shape = "cut"`) rather than the staircase."""
+    return scene.gas is not None and scene.gas.tube_shape == "cut"
+
+
 def mesh_gas_cut(scene, tubes: list[dict], meshes: list) -> tuple[GasCut | None, list[str]]:
-    """The meshes' cut of a scene's gas grid (None without gas or meshes), and the refusal of a cut
-    through which no gas can flow."""
-    if scene.gas is None or not meshes:
+    """The meshes' (and with `gas.tube_shape = "cut"` the tubes') cut of a scene's gas grid (None without gas, or
+    without meshes and cut tubes), and the refusal of a cut through which no gas can flow."""
+    if scene.gas is None or not (meshes or (cuts_tubes(scene) and tubes)):
         return None, []
-    solid, kinds, cut = gas_walls(gas_grid(scene), tubes, meshes)
+    solid, kinds, cut = gas_walls(gas_grid(scene), tubes, meshes, cut_tubes=cuts_tubes(scene))
     if (kinds[2][:, :, 0] == INLET).any():
         return cut, []
     return cut, [f"meshes: the meshes close every inlet face of the gas grid, or every path from the inlet to the "
@@ -133,12 +142,13 @@ def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
     return out
 
 
-def convection_walls(gg: GasGrid, tubes: list[dict], meshes: list, cut: GasCut | None) -> dict[str, np.ndarray] | None:
-    """`tube_walls`, and the heated meshes' wetted surface (`tidem.gas.mesh_convection`) in the cells
-    no tube borders: wall_k = len(tubes) + the mesh's index, wall_D its `convection_length`; a
+def convection_walls(gg: GasGrid, tubes: list[dict], meshes: list, cut: GasCut | None,
+                     cut_tubes: bool = False) -> dict[str, np.ndarray] | None:
+    """`tube_walls` (`tube_cut.tube_cut_walls` with `cut_tubes`), and the heated meshes' wetted surface
+    (`tidem.gas.mesh_convection`) in the cells no tube borders: wall_k = len(tubes) + the mesh's index, wall_D its `convection_length`; a
     mesh's area in the cells a tube (or an earlier mesh) holds goes to its other cells, so that each
     mesh keeps its whole wetted area. None without a heated surface that the gas touches."""
-    out = tube_walls(gg, tubes)
+    out = tube_cut_walls(gg, tubes, cut) if cut_tubes and tubes else tube_walls(gg, tubes)
     heated = [k for k, m in enumerate(meshes) if m.temperature is not None]
     if not heated or cut is None:
         return out

@@ -58,7 +58,8 @@ class GasCut:
         share = _coarse(self.fine_wet, self.unreachable.shape, self.fine).mean(axis=(1, 3, 5))
         return (share > 0.0) & (share < 1.0)
 
-    def report_lines(self) -> list[str]:
+    def report_lines(self, walls: str = "meshes") -> list[str]:
+        """`tidem check`'s line on the cut; `walls` names what cut the grid."""
         cut = (self.open_fraction < 1.0) & ~self.unreachable
         faces = sum(int(b.sum()) for b in self.blocked)
         shares = np.concatenate([a[(a > 0.0) & (a < 1.0) & ~b].ravel() for a, b in zip(self.aperture, self.blocked)])
@@ -66,7 +67,7 @@ class GasCut:
                  f"{self.open_fraction[cut].max():.2f}, {self.sub}^3 sub-cells per cell)" if cut.any() else "no cut cells")
         cut_faces = (f"{len(shares)} cut faces (open share {shares.min():.2f}-{shares.max():.2f})" if len(shares)
                      else "no cut faces")
-        return [f"gas grid: {faces} faces blocked by meshes, {int(self.unreachable.sum())} cells the gas cannot "
+        return [f"gas grid: {faces} faces blocked by {walls}, {int(self.unreachable.sum())} cells the gas cannot "
                 f"reach (solid), {cells}, {cut_faces}"]
 
 

@@ -20,7 +20,7 @@ import taichi as ti
 
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas.fields import allocate_gas_fields
-from tidem.gas.geometry import (averaging_length, convection_walls, gas_grid, gas_walls, grain_sauter_diameter,
+from tidem.gas.geometry import (averaging_length, convection_walls, cuts_tubes, gas_grid, gas_walls, grain_sauter_diameter,
                                 inlet_parts, parcel_rows_max, voidage_filters, voidage_layers)
 from tidem.gas.limits import MAX_COURANT, inlet_velocities
 from tidem.gas.open_volume import open_volumes
@@ -56,14 +56,15 @@ class GasPhase:
         self.interval = gas.coupling_interval
         self.dt = gas.coupling_interval * model.dt
         self.tol = max(gas.tolerance, 1e-5 if fp == ti.f32 else 0.0)
-        self.solid, self.kinds, self.cut = gas_walls(gg, model.tubes, model.meshes, model.gas_cut)
+        cut_tubes = cuts_tubes(scene)
+        self.solid, self.kinds, self.cut = gas_walls(gg, model.tubes, model.meshes, model.gas_cut, cut_tubes)
         self.tubes = model.tubes
         self.heated_meshes = [k for k, m in enumerate(model.meshes) if m.temperature is not None]
         self.velocities = dict(inlet_velocities(gas))  # {scene key: velocity or schedule}, `install` replaces one
         self.scheduled_inlet = any(is_scheduled(u) for u in self.velocities.values())
         self.inlet_parts = inlet_parts(gg, gas)  # background, then each nozzle (the dict's order)
         self.inlet = self.inlet_at(0.0)
-        walls = convection_walls(gg, model.tubes, model.meshes, self.cut) \
+        walls = convection_walls(gg, model.tubes, model.meshes, self.cut, cut_tubes) \
             if self.heat and gas.tube_convection != "none" else None
         self.walls = walls is not None
         self._wall_T = (walls["wall_T"].copy(), walls["wall_k"], walls["wall_A"] > 0.0) if self.walls else None

@@ -5,7 +5,7 @@ run)."""
 
 import math
 
-from tidem.gas.geometry import averaging_length, convection_walls, gas_grid, parcel_rows_max, voidage_layers
+from tidem.gas.geometry import averaging_length, convection_walls, cuts_tubes, gas_grid, parcel_rows_max, voidage_layers
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_smoothing import plan_filter
 from tidem.particles.contact_params import kinetic_theory_restitution
@@ -24,12 +24,19 @@ def parcel_restitution_text(scene) -> str:
     return f"; parcel restitution (kinetic theory): {', '.join(shown)}" if shown else ""
 
 
+def cut_walls_text(model) -> str:
+    """What cut the gas grid (`tidem check`'s line on the cut): the meshes, the tubes (`gas.tube_shape = "cut"`)
+    or both."""
+    tubes = "cut tubes" if cuts_tubes(model.scene) and model.tubes else ""
+    return " and ".join(w for w in ("meshes" if model.meshes else "", tubes) if w)
+
+
 def mesh_convection_lines(model) -> list[str]:
     """`tidem check`'s line per heated mesh that gives heat to the gas: the surface it shows the gas
     (`tidem.gas.mesh_convection`) against its area, and the cells that take it."""
     if model.scene.gas.tube_convection == "none" or model.gas_cut is None:
         return []
-    walls = convection_walls(gas_grid(model.scene), model.tubes, model.meshes, model.gas_cut)
+    walls = convection_walls(gas_grid(model.scene), model.tubes, model.meshes, model.gas_cut, cuts_tubes(model.scene))
     lines = []
     for k, m in enumerate(model.meshes):
         if m.temperature is None:
