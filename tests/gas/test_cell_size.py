@@ -19,6 +19,7 @@ def test_a_cell_size_per_axis_sets_each_axis_and_is_checked_per_axis():
 
     class Model:
         scene = deep
+        tubes = []
     assert any("one cell across y between walls" in note and "[0.005, 0.008, 0.005]" in note for note in gas_notes(Model))
     with pytest.raises(SceneError, match=r"gas.cell_size: cells of 0.0025 m are smaller than 2 particle diameters"):
         load("pseudo2d_bubbling_bed", ["gas.cell_size=[0.0025, 0.008, 0.005]"])

@@ -113,3 +113,18 @@ def test_a_uniform_bed_around_a_cut_tube_reads_its_solid_fraction_beside_it(solv
     solid_fraction = (1.0 - gas.G.eps.to_numpy())[fluid]
     expected = np.pi / 6 * 1e-12 / 0.0005**3
     assert np.abs(solid_fraction / expected - 1.0).max() < 0.06
+
+
+def test_check_notes_a_staircase_far_from_the_tube_section_and_what_resolves_it():
+    """`tidem check` notes a tube whose cells block more than 10 % away from its section: the slab's tube on 5 mm
+    cells (0.56), with the cut as the fix; a 10 mm tube on 11.1 mm cells (lab_fluidized_bundle's, 1.57), with
+    finer cells as the fix, one note for equal tubes; not the slab's tube on 3 mm cells (0.92)."""
+    from tidem.runner.check_report import staircase_notes
+
+    (note,) = staircase_notes(slab_grid(0.005), [TUBE])
+    assert "tubes[0] is the cells whose centre lies in it, 0.56 of the section" in note and "tube_shape" in note
+    assert staircase_notes(slab_grid(0.003), [TUBE]) == []
+    lab = GasGrid(lo=(0.0, 0.0, 0.0), cells=(9, 9, 22), h=(0.1 / 9, 0.1 / 9, 0.2444 / 22), periodic=(False, False, False))
+    tubes = [{"c": [x, 0.0, 0.0611], "mask": [1.0, 0.0, 1.0], "r": 0.005, "T": 353.15} for x in (0.0278, 0.0722)]
+    (note,) = staircase_notes(lab, tubes)
+    assert "tubes[0], tubes[1] are" in note and "1.57 of the section" in note and "a third of the diameter" in note

@@ -47,6 +47,13 @@ def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:
     return inside.reshape(gg.cells)
 
 
+def staircase_share(gg: GasGrid, tube: dict) -> float:
+    """The share of a tube's section that its cells (`tube_cells`) block for the gas."""
+    axis = int(np.flatnonzero(np.asarray(tube["mask"]) == 0.0)[0])
+    across = np.prod([gg.h[a] for a in range(3) if a != axis])
+    return float(tube_cells(gg, tube).sum() / gg.cells[axis] * across / (np.pi * tube["r"] ** 2))
+
+
 def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
     """1 for the cells a tube fills (`tube_cells`: wall for the gas)."""
     solid = np.zeros(gg.cells, np.int32)
