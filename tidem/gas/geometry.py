@@ -13,7 +13,7 @@ import numpy as np
 
 from tidem.gas.mesh import GasCut, gas_cut
 from tidem.gas.mesh_convection import inward_sides, wetted_area
-from tidem.gas.tube_cut import tube_cut_walls, tubes_triangles
+from tidem.gas.tube_cut import tube_axis, tube_cut_walls, tubes_triangles
 from tidem.kernels.gas_grid import CLOSED, INLET, INTERIOR, OUTLET, GasGrid
 from tidem.kernels.gas_smoothing import plan_filter
 from tidem.kernels.layered_voidage import parcel_rows
@@ -49,7 +49,7 @@ def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:
 
 def staircase_share(gg: GasGrid, tube: dict) -> float:
     """The share of a tube's section that its cells (`tube_cells`) block for the gas."""
-    axis = int(np.flatnonzero(np.asarray(tube["mask"]) == 0.0)[0])
+    axis = tube_axis(tube)
     across = np.prod([gg.h[a] for a in range(3) if a != axis])
     return float(tube_cells(gg, tube).sum() / gg.cells[axis] * across / (np.pi * tube["r"] ** 2))
 
@@ -138,7 +138,7 @@ def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
         for a in range(3):
             for shift in (1, -1):
                 borders += (shifted(gg, inside, a, shift) & ~inside) * face_area[a]
-        axis = int(np.flatnonzero(np.asarray(t["mask"]) == 0.0)[0])
+        axis = tube_axis(t)
         true_area = 2 * np.pi * t["r"] * gg.cells[axis] * gg.h[axis]
         mine = borders > 0
         area[mine] += borders[mine] * true_area / borders.sum()

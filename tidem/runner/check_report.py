@@ -5,10 +5,9 @@ run)."""
 
 import math
 
-import numpy as np
-
 from tidem.gas.geometry import (averaging_length, convection_walls, cuts_tubes, gas_grid, parcel_rows_max,
                                 staircase_share, voidage_layers)
+from tidem.gas.tube_cut import tube_axis
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_smoothing import plan_filter
 from tidem.particles.contact_params import kinetic_theory_restitution
@@ -96,7 +95,7 @@ def staircase_notes(gg, tubes: list[dict]) -> list[str]:
     for k, tube in enumerate(tubes):
         share = staircase_share(gg, tube)
         if abs(share - 1.0) > STAIRCASE_OFF:
-            axis = int(np.flatnonzero(np.asarray(tube["mask"]) == 0.0)[0])
+            axis = tube_axis(tube)
             fine = 2.0 * tube["r"] >= 3.0 * max(gg.h[a] for a in range(3) if a != axis)
             found.setdefault((f"{share:.2f}", fine), []).append(k)
     notes = []
