@@ -124,7 +124,8 @@ def test_check_notes_a_staircase_far_from_the_tube_section_and_what_resolves_it(
     (note,) = staircase_notes(slab_grid(0.005), [TUBE])
     assert "tubes[0] is the cells whose centre lies in it, 0.56 of the section" in note and "tube_shape" in note
     assert staircase_notes(slab_grid(0.003), [TUBE]) == []
-    lab = GasGrid(lo=(0.0, 0.0, 0.0), cells=(9, 9, 22), h=(0.1 / 9, 0.1 / 9, 0.2444 / 22), periodic=(False, False, False))
+    lab = GasGrid(lo=(0.0, 0.0, 0.0), cells=(9, 9, 22), h=(0.1 / 9, 0.1 / 9, 0.2444 / 22),
+                  periodic=(False, False, False))
     tubes = [{"c": [x, 0.0, 0.0611], "mask": [1.0, 0.0, 1.0], "r": 0.005, "T": 353.15} for x in (0.0278, 0.0722)]
     (note,) = staircase_notes(lab, tubes)
     assert "tubes[0], tubes[1] are" in note and "1.57 of the section" in note and "a third of the diameter" in note

@@ -152,9 +152,9 @@ def tube_walls(gg: GasGrid, tubes: list[dict]) -> dict[str, np.ndarray] | None:
 def convection_walls(gg: GasGrid, tubes: list[dict], meshes: list, cut: GasCut | None,
                      cut_tubes: bool = False) -> dict[str, np.ndarray] | None:
     """`tube_walls` (`tube_cut.tube_cut_walls` with `cut_tubes`), and the heated meshes' wetted surface
-    (`tidem.gas.mesh_convection`) in the cells no tube borders: wall_k = len(tubes) + the mesh's index, wall_D its `convection_length`; a
-    mesh's area in the cells a tube (or an earlier mesh) holds goes to its other cells, so that each
-    mesh keeps its whole wetted area. None without a heated surface that the gas touches."""
+    (`tidem.gas.mesh_convection`) in the cells no tube borders: wall_k = len(tubes) + the mesh's index, wall_D
+    its `convection_length`; a mesh's area in the cells a tube (or an earlier mesh) holds goes to its other cells,
+    so that each mesh keeps its whole wetted area. None without a heated surface that the gas touches."""
     out = tube_cut_walls(gg, tubes, cut) if cut_tubes and tubes else tube_walls(gg, tubes)
     heated = [k for k, m in enumerate(meshes) if m.temperature is not None]
     if not heated or cut is None:

@@ -20,8 +20,8 @@ import taichi as ti
 
 from tidem.analytic.fluidized_bed_heat import wen_yu_minimum_fluidization
 from tidem.gas.fields import allocate_gas_fields
-from tidem.gas.geometry import (averaging_length, convection_walls, cuts_tubes, gas_grid, gas_walls, grain_sauter_diameter,
-                                inlet_parts, parcel_rows_max, voidage_filters, voidage_layers)
+from tidem.gas.geometry import (averaging_length, convection_walls, cuts_tubes, gas_grid, gas_walls,
+                                grain_sauter_diameter, inlet_parts, parcel_rows_max, voidage_filters, voidage_layers)
 from tidem.gas.limits import MAX_COURANT, inlet_velocities
 from tidem.gas.open_volume import open_volumes
 from tidem.gas.probes import probe_pressures

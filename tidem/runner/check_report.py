@@ -39,7 +39,8 @@ def mesh_convection_lines(model) -> list[str]:
     (`tidem.gas.mesh_convection`) against its area, and the cells that take it."""
     if model.scene.gas.tube_convection == "none" or model.gas_cut is None:
         return []
-    walls = convection_walls(gas_grid(model.scene), model.tubes, model.meshes, model.gas_cut, cuts_tubes(model.scene))
+    walls = convection_walls(gas_grid(model.scene), model.tubes, model.meshes, model.gas_cut,
+                             cuts_tubes(model.scene))
     lines = []
     for k, m in enumerate(model.meshes):
         if m.temperature is None:
