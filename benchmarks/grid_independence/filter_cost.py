@@ -1,8 +1,9 @@
-"""What the averaging-length filters and the cut tube cost: fluidized_tube over the cells' own averaging ("cells"),
-with the voidage filtered to `gas.averaging_length` ("filtered"), with the drag's exchange filtered too
-(`gas.drag_averaging = "length"`, "drag") and with the voidage filtered and the tube cut into the gas grid
-(`gas.tube_shape = "cut"`, "cut_tube"), run alternately in separate processes, and the ratios of their stepping
-wall times (run.json `wall_s`, set-up excluded) to the first variant's.
+"""What the averaging-length filters and the cut tube cost: fluidized_tube with its tube as the staircase of cells
+(`gas.tube_shape = "cells"`) over the cells' own averaging ("cells"), with the voidage filtered to
+`gas.averaging_length` ("filtered"), with the drag's exchange filtered too (`gas.drag_averaging = "length"`,
+"drag"), and with the voidage filtered and the tube cut into the gas grid (`gas.tube_shape = "cut"`, the default,
+"cut_tube"), run alternately in separate processes, and the ratios of their stepping wall times (run.json
+`wall_s`, set-up excluded) to the first variant's.
 
     python benchmarks/grid_independence/filter_cost.py [--cell 0.003] [--length 0.012] [--t-end 0.3] [--rounds 2]
         [--variants cells,filtered]
@@ -15,8 +16,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-VARIANTS = {"cells": {"gas.averaging_length": "cells"}, "filtered": {},
-            "drag": {"gas.drag_averaging": "length"},
+STAIRCASE = {"gas.tube_shape": "cells"}
+VARIANTS = {"cells": {**STAIRCASE, "gas.averaging_length": "cells"}, "filtered": STAIRCASE,
+            "drag": {**STAIRCASE, "gas.drag_averaging": "length"},
             "cut_tube": {"gas.tube_shape": "cut"}}  # each variant's keys over the length's
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import make_scene
-from tidem.gas.geometry import convection_walls, gas_walls, solid_cells
+from tidem.gas.geometry import convection_walls, cut_share, gas_walls, solid_cells
 from tidem.gas.tube_cut import TUBE_FACETS, tube_triangles
 from tidem.kernels.gas_grid import GasGrid
 
@@ -43,6 +43,7 @@ def test_the_gas_loses_the_tube_section_on_any_grid(h):
     solid, _, cut = gas_walls(gg, [TUBE], [], cut_tubes=True)
     lost = (solid[:, 0, :].sum() + ((1.0 - cut.open_fraction[:, 0, :]) * (solid[:, 0, :] == 0)).sum()) * cell_area
     assert lost / section == pytest.approx(1.0, abs=0.05)
+    assert cut_share(gg, TUBE, cut) == pytest.approx(lost / section, rel=1e-9)  # `tidem check`'s share
     staircase = solid_cells(gg, [TUBE])[:, 0, :].sum() * cell_area / section
     assert abs(staircase - 1.0) > 0.07  # what the cut replaces: 8 to 44 % off on these grids
 
@@ -115,17 +116,22 @@ def test_a_uniform_bed_around_a_cut_tube_reads_its_solid_fraction_beside_it(solv
     assert np.abs(solid_fraction / expected - 1.0).max() < 0.06
 
 
-def test_check_notes_a_staircase_far_from_the_tube_section_and_what_resolves_it():
-    """`tidem check` notes a tube whose cells block more than 10 % away from its section: the slab's tube on 5 mm
-    cells (0.56), with the cut as the fix; a 10 mm tube on 11.1 mm cells (lab_fluidized_bundle's, 1.57), with
-    finer cells as the fix, one note for equal tubes; not the slab's tube on 3 mm cells (0.92)."""
-    from tidem.runner.check_report import staircase_notes
+def test_check_notes_a_tube_far_from_its_section_and_what_resolves_it():
+    """`tidem check` notes a tube that blocks the gas more than 10 % away from its section. As the staircase: the
+    slab's tube on 5 mm cells (0.56), with the cut as the fix; not on 3 mm cells (0.92). A 10 mm tube on 11.1 mm
+    cells (lab_fluidized_bundle's) blocks 1.57 of it either way (the cut seals the cells it nearly fills), with
+    finer cells as the fix, one note for equal tubes; the slab's tube cut into 5 mm cells (1.02) gets none."""
+    from tidem.runner.check_report import tube_section_notes
 
-    (note,) = staircase_notes(slab_grid(0.005), [TUBE])
+    (note,) = tube_section_notes(slab_grid(0.005), [TUBE])
     assert "tubes[0] is the cells whose centre lies in it, 0.56 of the section" in note and "tube_shape" in note
-    assert staircase_notes(slab_grid(0.003), [TUBE]) == []
+    assert tube_section_notes(slab_grid(0.003), [TUBE]) == []
+    five = slab_grid(0.005)
+    assert tube_section_notes(five, [TUBE], gas_walls(five, [TUBE], [], cut_tubes=True)[2]) == []
     lab = GasGrid(lo=(0.0, 0.0, 0.0), cells=(9, 9, 22), h=(0.1 / 9, 0.1 / 9, 0.2444 / 22),
                   periodic=(False, False, False))
     tubes = [{"c": [x, 0.0, 0.0611], "mask": [1.0, 0.0, 1.0], "r": 0.005, "T": 353.15} for x in (0.0278, 0.0722)]
-    (note,) = staircase_notes(lab, tubes)
+    (note,) = tube_section_notes(lab, tubes)
     assert "tubes[0], tubes[1] are" in note and "1.57 of the section" in note and "a third of the diameter" in note
+    (note,) = tube_section_notes(lab, tubes, gas_walls(lab, tubes, [], cut_tubes=True)[2])
+    assert "tubes[0], tubes[1] cut into these cells block 1.57 of the section" in note and "a third" in note

@@ -55,13 +55,13 @@ def test_the_scene_estimate_matches_the_built_model():
     assert memory.lattice_site_count(scene.scene.particles[0].region, 0.0102, "cubic") == model.capacity
 
 
-@pytest.mark.parametrize("drag_averaging", ["cells", "length"])
-def test_the_gas_estimate_counts_every_field_a_cell_has(solver_for, drag_averaging):
+@pytest.mark.parametrize("drag_averaging, tube_shape", [("cells", "cut"), ("length", "cells")])
+def test_the_gas_estimate_counts_every_field_a_cell_has(solver_for, drag_averaging, tube_shape):
     """The gas grid's allocated fields, each counted as cells, faces or layers, against `gas_cell_bytes` (the
-    averaging-length filters' scratch fields included) plus `gas_band_bytes`, the direct solve's band of this thin
-    grid."""
+    averaging-length filters' scratch fields and the cut tube's gas parts and apertures included) plus
+    `gas_band_bytes`, the direct solve's band of this thin grid."""
     raw = fixed_grains(lattice_bed(hole=(0.015, 0.03, 0.0046)), 0.003, length=0.012, tube=True)
-    raw["gas"]["drag_averaging"] = drag_averaging
+    raw["gas"].update(drag_averaging=drag_averaging, tube_shape=tube_shape)
     s = solver_for(raw)
     gas = s.gas
     cells = math.prod(gas.gg.cells)
@@ -76,7 +76,7 @@ def test_the_gas_estimate_counts_every_field_a_cell_has(solver_for, drag_averagi
     assert gas.band > 0
     band = memory.gas_band_bytes(s.model.scene)
     assert band == 8 * (gas.band + 2)
-    assert per_cell == memory.gas_cell_bytes(s.model.features, gas.layers, filters) + band
+    assert per_cell == memory.gas_cell_bytes(s.model.features, gas.layers, filters, tube_shape == "cut") + band
 
 
 def test_the_band_is_counted_as_the_cpus_before_taichi_starts(monkeypatch):

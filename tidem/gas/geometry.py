@@ -54,6 +54,19 @@ def staircase_share(gg: GasGrid, tube: dict) -> float:
     return float(tube_cells(gg, tube).sum() / gg.cells[axis] * across / (np.pi * tube["r"] ** 2))
 
 
+def cut_share(gg: GasGrid, tube: dict, cut: GasCut) -> float:
+    """The share of a tube's section that the gas loses to it cut into the grid (`gas.tube_shape = "cut"`): the
+    cells sealed whole and the cut cells' part outside their gas part, over the cells within half a cell's
+    diagonal of the tube's surface."""
+    axis = tube_axis(tube)
+    idx = np.indices(gg.cells).reshape(3, -1).T
+    d = (np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h) - np.asarray(tube["c"])) * np.asarray(tube["mask"])
+    reach = tube["r"] + 0.5 * np.hypot(*[gg.h[a] for a in range(3) if a != axis])
+    near = (np.einsum("ij,ij->i", d, d) < reach**2).reshape(gg.cells)
+    lost = np.where(cut.unreachable, 1.0, 1.0 - cut.open_fraction)[near].sum()
+    return float(lost / gg.cells[axis] * np.prod([gg.h[a] for a in range(3) if a != axis]) / (np.pi * tube["r"] ** 2))
+
+
 def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
     """1 for the cells a tube fills (`tube_cells`: wall for the gas)."""
     solid = np.zeros(gg.cells, np.int32)

@@ -5,8 +5,8 @@ run)."""
 
 import math
 
-from tidem.gas.geometry import (averaging_length, convection_walls, cuts_tubes, gas_grid, parcel_rows_max,
-                                staircase_share, voidage_layers)
+from tidem.gas.geometry import (averaging_length, convection_walls, cut_share, cuts_tubes, gas_grid,
+                                parcel_rows_max, staircase_share, voidage_layers)
 from tidem.gas.tube_cut import tube_axis
 from tidem.kernels.gas_band import band_width
 from tidem.kernels.gas_smoothing import plan_filter
@@ -15,7 +15,7 @@ from tidem.runner.output_size import cadence
 from tidem.scene.sizes import AVERAGING_GRAINS, parcel_ratios
 
 LONG_RUN = 100_000_000  # steps beyond which `tidem check` notes the run's length
-STAIRCASE_OFF = 0.1  # a tube's staircase blocking more than this away from its section is noted
+SECTION_OFF = 0.1  # a tube blocking the gas more than this away from its section is noted
 
 
 def parcel_restitution_text(scene) -> str:
@@ -86,26 +86,34 @@ def gas_notes(model) -> list[str]:
              f"gas.cell_size (now {size} m)"] if gg.cells[2] < 3 else []
     notes += [f"note: the gas grid has one cell across {'xy'[a]} between walls, so the gas flow does not resolve "
               f"it; a smaller gas.cell_size (now {size} m)" for a in range(2) if gg.cells[a] == 1 and not gg.periodic[a]]
-    return notes + ([] if cuts_tubes(model.scene) else staircase_notes(gg, model.tubes))
+    cut = model.gas_cut if cuts_tubes(model.scene) and model.tubes else None
+    return notes + tube_section_notes(gg, model.tubes, cut)
 
 
-def staircase_notes(gg, tubes: list[dict]) -> list[str]:
-    """`tidem check`'s note on the tubes whose cells (the gas's staircase, `gas.tube_shape = "cells"`) block more
-    than STAIRCASE_OFF away from their section, and what would represent them better (one note per share)."""
+def tube_section_notes(gg, tubes: list[dict], cut=None) -> list[str]:
+    """`tidem check`'s note on the tubes that block the gas more than SECTION_OFF away from their section, and
+    what would represent them better (one note per share): as the cells whose centre lies in them (the staircase,
+    `gas.tube_shape = "cells"`), or cut into the grid (`cut`, "cut") where cells as wide as a tube seal it whole."""
     found: dict[tuple[str, bool], list[int]] = {}
     for k, tube in enumerate(tubes):
-        share = staircase_share(gg, tube)
-        if abs(share - 1.0) > STAIRCASE_OFF:
+        share = staircase_share(gg, tube) if cut is None else cut_share(gg, tube, cut)
+        if abs(share - 1.0) > SECTION_OFF:
             axis = tube_axis(tube)
             fine = 2.0 * tube["r"] >= 3.0 * max(gg.h[a] for a in range(3) if a != axis)
             found.setdefault((f"{share:.2f}", fine), []).append(k)
     notes = []
     for (share, fine), ks in found.items():
-        fix = ("gas.tube_shape = \"cut\" cuts the section into the cells (docs/design/cut_faces.md)" if fine else
-               "cells a third of the diameter or finer would resolve it")
+        fix = ("gas.tube_shape = \"cut\" cuts the section into the cells (docs/design/cut_faces.md)"
+               if fine and cut is None else "cells a third of the diameter or finer would resolve it")
         names = ", ".join(f"tubes[{k}]" for k in ks)
-        notes.append(f"note: for the gas, {names} {'is' if len(ks) == 1 else 'are'} the cells whose centre lies in "
-                     f"{'it' if len(ks) == 1 else 'each'}, {share} of the section on these cells; {fix}")
+        one = len(ks) == 1
+        if cut is None:
+            shape = (f"{'is' if one else 'are'} the cells whose centre lies in {'it' if one else 'each'}, {share} "
+                     "of the section on these cells")
+        else:
+            shape = (f"cut into these cells {'blocks' if one else 'block'} {share} of the section (the cells "
+                     f"{'it' if one else 'each'} nearly fills are sealed whole)")
+        notes.append(f"note: for the gas, {names} {shape}; {fix}")
     return notes
 
 

@@ -56,7 +56,7 @@ class Gas(Strict):
     drag_averaging: Literal["cells", "length"] = "cells"
     heat_transfer: Literal["ranz_marshall", "gunn"] = "ranz_marshall"
     tube_convection: Literal["martin_nilles", "churchill_bernstein", "none"] = "martin_nilles"
-    tube_shape: Literal["cells", "cut"] = "cells"
+    tube_shape: Literal["cells", "cut"] = "cut"
     conduction: StrictBool = True
     coupling_interval: StrictInt = Field(default=10, ge=1)
     tolerance: Positive = 1e-8

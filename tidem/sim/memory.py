@@ -20,7 +20,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from tidem.gas.geometry import averaging_length, gas_grid, layers_for, voidage_filters, voidage_layers
+from tidem.gas.geometry import (averaging_length, cuts_tubes, gas_grid, layers_for, voidage_filters,
+                                voidage_layers)
 from tidem.kernels.gas_band import band_width
 from tidem.particles.storage_order import sorts_storage
 from tidem.runtime.startup import running_arch
@@ -120,12 +121,14 @@ def gas_filters(scene, layers: int) -> tuple[bool, bool, bool]:
     return tuple(f is not None for f in made)
 
 
-def gas_cell_bytes(feat, layers: int = 1, filters: tuple[bool, bool, bool] = (False, False, False)) -> int:
+def gas_cell_bytes(feat, layers: int = 1, filters: tuple[bool, bool, bool] = (False, False, False),
+                   cut_tubes: bool = False) -> int:
     """Bytes of the gas grid's Taichi fields per cell (`tidem.gas.fields.allocate_gas_fields`), with `layers` voidage
-    layers a cell and the scratch fields of the averaging-length `filters` (`gas_filters`)."""
+    layers a cell, the scratch fields of the averaging-length `filters` (`gas_filters`) and the tubes cut into the
+    grid or not (`gas.tube_shape`)."""
     fp = feat.float_bytes
     open_share = 4 * bool(feat.n_meshes or feat.n_tubes)  # open volumes of the cell and its faces beside walls
-    cut = 4 * bool(feat.n_meshes)  # a mesh's gas part of the cell and its faces' apertures
+    cut = 4 * bool(feat.n_meshes or (feat.n_tubes and cut_tubes))  # the cut's gas part of a cell, its faces' apertures
     layered = layers if layers > 1 else 0
     scratch = filters[0] + layers * filters[1] + 3 * 3 * filters[2]  # solid_tmp, layer_tmp; uf, face_tmp(2) per face
     return fp * (9 + 4 * feat.heat + 8 * 3 + bool(feat.reactions) + 3 * feat.species + open_share + cut + layered
@@ -230,7 +233,7 @@ def scene_items(scene) -> list[Item]:
         grains = scene.gas.parcel_voidage == "grain_layers"  # layers one grain high, else one parcel high
         layers = layers_for(scene, min((1 if grains else g.coarse_grain) * _smallest_diameter(g.diameter)
                                        for g in scene.particles))
-        per_cell = gas_cell_bytes(feat, layers, gas_filters(scene, layers)) + gas_band_bytes(scene)
+        per_cell = gas_cell_bytes(feat, layers, gas_filters(scene, layers), cuts_tubes(scene)) + gas_band_bytes(scene)
         per_cell += GAS_HOST_BYTES_PER_CELL
         items.append(Item(f"the {format_count(cells)} cells of the gas grid", cells * per_cell, "gas.cell_size",
                           "use larger gas cells or a smaller domain"))
@@ -301,7 +304,8 @@ def field_bytes(model) -> int:
     cells = model.grid.n_cells * CELL_BYTES
     if f.gas:
         layers = voidage_layers(model)
-        per_cell = gas_cell_bytes(f, layers, gas_filters(model.scene, layers)) + gas_band_bytes(model.scene)
+        per_cell = (gas_cell_bytes(f, layers, gas_filters(model.scene, layers), cuts_tubes(model.scene))
+                    + gas_band_bytes(model.scene))
         cells += math.prod(gas_grid(model.scene).cells) * per_cell
     return per * model.capacity + cells + mesh_field_bytes(model)
 
