@@ -103,8 +103,12 @@ def tube_section_notes(gg, tubes: list[dict], cut=None) -> list[str]:
             found.setdefault((f"{share:.2f}", fine), []).append(k)
     notes = []
     for (share, fine), ks in found.items():
-        fix = ("gas.tube_shape = \"cut\" cuts the section into the cells (docs/design/cut_faces.md)"
-               if fine and cut is None else "cells a third of the diameter or finer would resolve it")
+        if not fine:
+            fix = "cells a third of the diameter or finer would resolve it"
+        elif cut is None:
+            fix = "gas.tube_shape = \"cut\" cuts the section into the cells (docs/design/cut_faces.md)"
+        else:
+            fix = "finer cells would resolve it"
         names = ", ".join(f"tubes[{k}]" for k in ks)
         one = len(ks) == 1
         if cut is None:
