@@ -135,3 +135,21 @@ def test_check_notes_a_tube_far_from_its_section_and_what_resolves_it():
     assert "tubes[0], tubes[1] are" in note and "1.57 of the section" in note and "a third of the diameter" in note
     (note,) = tube_section_notes(lab, tubes, gas_walls(lab, tubes, [], cut_tubes=True)[2])
     assert "tubes[0], tubes[1] cut into these cells block 1.57 of the section" in note and "a third" in note
+
+
+def test_a_cut_tube_across_the_whole_width_is_refused_by_name():
+    """A 15 mm tube spanning a 15 mm wide slab leaves the gas no way past it: the refusal names the tubes, not the
+    meshes the scene does not have."""
+    from tidem.scene.errors import SceneError
+    from tidem.scene.load import validate
+    from tidem.sim.model import build_model
+
+    raw = cut_tube_bed(0.2)
+    raw["domain"]["max"][0] = 0.015
+    raw["tubes"][0]["center"][0] = 0.0075
+    raw["particles"][0]["positions"] = [[0.005, 0.006, 0.09]]
+    with pytest.raises(SceneError) as exc:
+        build_model(validate(raw))
+    (msg,) = exc.value.messages
+    assert msg.startswith("tubes: the tubes close every inlet face of the gas grid, or every path from the inlet")
+    assert "open the distributor under the tubes" in msg

@@ -118,10 +118,11 @@ def mesh_gas_cut(scene, tubes: list[dict], meshes: list) -> tuple[GasCut | None,
     solid, kinds, cut = gas_walls(gas_grid(scene), tubes, meshes, cut_tubes=cuts_tubes(scene))
     if (kinds[2][:, :, 0] == INLET).any():
         return cut, []
-    return cut, [f"meshes: the meshes close every inlet face of the gas grid, or every path from the inlet to the "
-                 f"outlet ({int(cut.unreachable.sum())} of {solid.size} gas cells sealed off), so no gas can flow: "
-                 "open the distributor under the meshes and a way up to the top, or make gas.cell_size fit the "
-                 "openings (a face is closed where a mesh cuts half of it)"]
+    walls = " and ".join(w for w in ("meshes" if meshes else "", "tubes" if cuts_tubes(scene) and tubes else "") if w)
+    return cut, [f"{walls.replace(' and ', ', ')}: the {walls} close every inlet face of the gas grid, or every path "
+                 f"from the inlet to the outlet ({int(cut.unreachable.sum())} of {solid.size} gas cells sealed off), "
+                 f"so no gas can flow: open the distributor under the {walls} and a way up to the top, or make "
+                 f"gas.cell_size fit the openings (a face is closed where a wall cuts half of it)"]
 
 
 def shifted(gg: GasGrid, mask: np.ndarray, a: int, shift: int) -> np.ndarray:
