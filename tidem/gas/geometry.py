@@ -29,29 +29,39 @@ def gas_grid(scene) -> GasGrid:
     return GasGrid(lo=tuple(dom.min), cells=cells, h=tuple(h), periodic=periodic)
 
 
+def axis_distance2(gg: GasGrid, tube: dict) -> np.ndarray:
+    """[cells, flat] the squared distance of each cell centre from a tube's axis."""
+    idx = np.indices(gg.cells).reshape(3, -1).T
+    d = (np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h) - np.asarray(tube["c"])) * np.asarray(tube["mask"])
+    return np.einsum("ij,ij->i", d, d)
+
+
 def tube_cells(gg: GasGrid, tube: dict) -> np.ndarray:
     """The cells a tube fills for the gas: those whose centre lies inside it, or, for a tube
     too thin to hold a cell centre, the one row of cells along its axis nearest to it (the
     first of equals on a cell edge or corner), so that every tube blocks the gas and exchanges
     heat with it. Tubes centred on cell centres are represented best."""
-    idx = np.indices(gg.cells).reshape(3, -1).T
-    centres = np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h)
-    mask = np.asarray(tube["mask"])
-    d = (centres - np.asarray(tube["c"])) * mask
-    dist2 = np.einsum("ij,ij->i", d, d)
+    dist2 = axis_distance2(gg, tube)
     inside = dist2 < tube["r"] ** 2
     if not inside.any():
-        across = mask > 0  # the two axes across the tube
+        idx = np.indices(gg.cells).reshape(3, -1).T
+        across = np.asarray(tube["mask"]) > 0  # the two axes across the tube
         nearest = idx[np.argmin(dist2)]
         inside = (idx[:, across] == nearest[across]).all(axis=1)
     return inside.reshape(gg.cells)
 
 
-def staircase_share(gg: GasGrid, tube: dict) -> float:
-    """The share of a tube's section that its cells (`tube_cells`) block for the gas."""
+def section_per_cell(gg: GasGrid, tube: dict) -> float:
+    """The share of a tube's section that one whole cell along its length stands for (a cell's area across the
+    axis over the cells along it, over pi r^2)."""
     axis = tube_axis(tube)
     across = np.prod([gg.h[a] for a in range(3) if a != axis])
-    return float(tube_cells(gg, tube).sum() / gg.cells[axis] * across / (np.pi * tube["r"] ** 2))
+    return float(across / gg.cells[axis] / (np.pi * tube["r"] ** 2))
+
+
+def staircase_share(gg: GasGrid, tube: dict) -> float:
+    """The share of a tube's section that its cells (`tube_cells`) block for the gas."""
+    return float(tube_cells(gg, tube).sum()) * section_per_cell(gg, tube)
 
 
 def cut_share(gg: GasGrid, tube: dict, cut: GasCut) -> float:
@@ -59,12 +69,10 @@ def cut_share(gg: GasGrid, tube: dict, cut: GasCut) -> float:
     cells sealed whole and the cut cells' part outside their gas part, over the cells within half a cell's
     diagonal of the tube's surface."""
     axis = tube_axis(tube)
-    idx = np.indices(gg.cells).reshape(3, -1).T
-    d = (np.asarray(gg.lo) + (idx + 0.5) * np.asarray(gg.h) - np.asarray(tube["c"])) * np.asarray(tube["mask"])
     reach = tube["r"] + 0.5 * np.hypot(*[gg.h[a] for a in range(3) if a != axis])
-    near = (np.einsum("ij,ij->i", d, d) < reach**2).reshape(gg.cells)
+    near = (axis_distance2(gg, tube) < reach**2).reshape(gg.cells)
     lost = np.where(cut.unreachable, 1.0, 1.0 - cut.open_fraction)[near].sum()
-    return float(lost / gg.cells[axis] * np.prod([gg.h[a] for a in range(3) if a != axis]) / (np.pi * tube["r"] ** 2))
+    return float(lost) * section_per_cell(gg, tube)
 
 
 def solid_cells(gg: GasGrid, tubes: list[dict]) -> np.ndarray:
@@ -118,8 +126,9 @@ def mesh_gas_cut(scene, tubes: list[dict], meshes: list) -> tuple[GasCut | None,
     solid, kinds, cut = gas_walls(gas_grid(scene), tubes, meshes, cut_tubes=cuts_tubes(scene))
     if (kinds[2][:, :, 0] == INLET).any():
         return cut, []
-    walls = " and ".join(w for w in ("meshes" if meshes else "", "tubes" if cuts_tubes(scene) and tubes else "") if w)
-    return cut, [f"{walls.replace(' and ', ', ')}: the {walls} close every inlet face of the gas grid, or every path "
+    keys = [k for k, present in (("meshes", meshes), ("tubes", cuts_tubes(scene) and tubes)) if present]
+    walls = " and ".join(keys)
+    return cut, [f"{', '.join(keys)}: the {walls} close every inlet face of the gas grid, or every path "
                  f"from the inlet to the outlet ({int(cut.unreachable.sum())} of {solid.size} gas cells sealed off), "
                  f"so no gas can flow: open the distributor under the {walls} and a way up to the top, or make "
                  f"gas.cell_size fit the openings (a face is closed where a wall cuts half of it)"]
